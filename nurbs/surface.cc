@@ -1,0 +1,133 @@
+#include "nurbs/surface.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "nurbs/basis.h"
+#include "nurbs/refinement.h"
+
+namespace tangent::nurbs {
+
+namespace {
+
+std::string Index2(int i, int j) {
+  return "[" + std::to_string(i) + "][" + std::to_string(j) + "]";
+}
+
+}  // namespace
+
+NurbsSurface::NurbsSurface(KnotVector knots_u, KnotVector knots_v,
+                           const std::vector<Eigen::Vector3d>& points,
+                           const std::vector<double>& weights)
+    : knots_u_(std::move(knots_u)), knots_v_(std::move(knots_v)) {
+  const size_t n = static_cast<size_t>(num_u()) * static_cast<size_t>(num_v());
+  if (points.size() != n) {
+    std::ostringstream os;
+    os << "NURBS surface: " << points.size() << " control points given; knot vectors of "
+       << knots_u_.size() << " (degree " << degree_u() << ") and " << knots_v_.size()
+       << " (degree " << degree_v() << ") knots need " << num_u() << " x " << num_v() << " = "
+       << n;
+    throw std::invalid_argument(os.str());
+  }
+  if (!weights.empty() && weights.size() != n) {
+    throw std::invalid_argument("NURBS surface: " + std::to_string(weights.size()) +
+                                " weights given for " + std::to_string(n) + " control points");
+  }
+  cpw_.resize(n);
+  for (int i = 0; i < num_u(); ++i) {
+    for (int j = 0; j < num_v(); ++j) {
+      const size_t k = static_cast<size_t>(i * num_v() + j);
+      const double w = weights.empty() ? 1.0 : weights[k];
+      if (!points[k].allFinite()) {
+        throw std::invalid_argument("NURBS surface: control point " + Index2(i, j) +
+                                    " has a non-finite coordinate");
+      }
+      if (!std::isfinite(w) || !(w > 0.0)) {
+        std::ostringstream os;
+        os << "NURBS surface: weight " << Index2(i, j) << " = " << w
+           << " must be positive and finite";
+        throw std::invalid_argument(os.str());
+      }
+      cpw_[k] << w * points[k], w;
+    }
+  }
+  Finish();
+}
+
+NurbsSurface::NurbsSurface(KnotVector knots_u, KnotVector knots_v,
+                           std::vector<Eigen::Vector4d> cpw, int)
+    : knots_u_(std::move(knots_u)), knots_v_(std::move(knots_v)), cpw_(std::move(cpw)) {}
+
+NurbsSurface NurbsSurface::FromHomogeneous(KnotVector knots_u, KnotVector knots_v,
+                                           std::vector<Eigen::Vector4d> weighted_points) {
+  const size_t n = static_cast<size_t>(knots_u.num_basis()) * static_cast<size_t>(knots_v.num_basis());
+  if (weighted_points.size() != n) {
+    throw std::invalid_argument("NURBS surface: " + std::to_string(weighted_points.size()) +
+                                " homogeneous control points given, knot vectors need " +
+                                std::to_string(n));
+  }
+  for (size_t k = 0; k < n; ++k) {
+    if (!weighted_points[k].allFinite() || !(weighted_points[k][3] > 0.0)) {
+      throw std::invalid_argument("NURBS surface: homogeneous control point " + std::to_string(k) +
+                                  " is not finite or has a non-positive weight");
+    }
+  }
+  NurbsSurface s(std::move(knots_u), std::move(knots_v), std::move(weighted_points), 0);
+  s.Finish();
+  return s;
+}
+
+void NurbsSurface::Finish() {
+  rational_ = std::any_of(cpw_.begin(), cpw_.end(),
+                          [&](const Eigen::Vector4d& h) { return h[3] != cpw_.front()[3]; });
+  fast_ = internal::BuildSpanForm(*this);
+}
+
+SurfacePoint NurbsSurface::Evaluate(double u, double v, int order) const {
+  SpanHint hint;
+  SurfacePoint out;
+  switch (order) {
+    case 0: Evaluate<0>(u, v, &hint, &out); break;
+    case 1: Evaluate<1>(u, v, &hint, &out); break;
+    default: Evaluate<2>(u, v, &hint, &out); break;
+  }
+  return out;
+}
+
+SurfacePoint EvaluateReference(const NurbsSurface& surface, double u, double v, int order) {
+  const KnotVector& ku = surface.knots_u();
+  const KnotVector& kv = surface.knots_v();
+  u = std::clamp(u, ku.domain_begin(), ku.domain_end());
+  v = std::clamp(v, kv.domain_begin(), kv.domain_end());
+  order = std::clamp(order, 0, kMaxOrder);
+  const int p = ku.degree();
+  const int q = kv.degree();
+  const int su = ku.FindSpan(u);
+  const int sv = kv.FindSpan(v);
+  BasisTable nu{}, nv{};
+  BasisDerivatives(ku, su, u, order, &nu);
+  BasisDerivatives(kv, sv, v, order, &nv);
+  // A^(k,l) = Σ_i Σ_j N_i^(k)(u) M_j^(l)(v) P^w_ij for k + l ≤ order.
+  HomogeneousSurfaceDerivs h;
+  const int kl[6][2] = {{0, 0}, {1, 0}, {0, 1}, {2, 0}, {1, 1}, {0, 2}};
+  const int count = order == 0 ? 1 : (order == 1 ? 3 : 6);
+  for (int d = 0; d < count; ++d) {
+    Eigen::Vector4d acc = Eigen::Vector4d::Zero();
+    for (int i = 0; i <= p; ++i) {
+      Eigen::Vector4d row = Eigen::Vector4d::Zero();
+      for (int j = 0; j <= q; ++j) {
+        row += nv[static_cast<size_t>(kl[d][1])][static_cast<size_t>(j)] *
+               surface.weighted_point(su - p + i, sv - q + j);
+      }
+      acc += nu[static_cast<size_t>(kl[d][0])][static_cast<size_t>(i)] * row;
+    }
+    h.A[d] = acc;
+  }
+  SurfacePoint out;
+  RationalQuotient(h, order, &out);
+  return out;
+}
+
+}  // namespace tangent::nurbs

@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# The main job. For now: the NURBS kernel demo (primitives, tessellation bounds) and the
+# evaluation benchmark with Open CASCADE measured in the same run, printed as ratios.
+# Later: the live tangentd + tangent-phantom demo.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install-deps.sh
+bash scripts/build.sh
+./build/bench/tangent_nurbs_demo
+./build/bench/nurbs_eval_bench --benchmark_min_time=0.2 --benchmark_out=build/nurbs_eval_bench.json \
+  --benchmark_out_format=json

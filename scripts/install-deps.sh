@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Installs every build, test and benchmark dependency of Tangent from Debian's packages.
+# Idempotent: apt-get skips what is already installed. Run as root on Debian 12 (bookworm).
+set -euo pipefail
+
+packages=(
+  # Build tools.
+  build-essential cmake ninja-build pkg-config git clang-format
+  # Linear algebra (all of it: fixed-size in hot paths).
+  libeigen3-dev
+  # Mesh certification (self-intersection, Hausdorff, exact point-in-trim).
+  libcgal-dev
+  # BVH collision on offset meshes, broad phase.
+  libfcl-dev
+  # Transport and logging; liblcm-bin provides lcm-gen.
+  liblcm-dev liblcm-bin
+  # Tests and benchmarks.
+  libgtest-dev libgmock-dev libbenchmark-dev
+  # Scenes and command lines.
+  nlohmann-json3-dev libcli11-dev
+  # Peers for cross-checks and benchmarks: Open CASCADE, IPOPT, NLopt.
+  libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
+  coinor-libipopt-dev libnlopt-cxx-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages already installed"
+  exit 0
+fi
+
+if [ "$(id -u)" -ne 0 ]; then
+  echo "install-deps: missing packages (${missing[*]}); run this script as root" >&2
+  exit 1
+fi
+
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+apt-get install -y -qq --no-install-recommends "${missing[@]}"
