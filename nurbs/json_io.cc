@@ -1,0 +1,276 @@
+#include "nurbs/json_io.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace tangent::nurbs {
+
+namespace {
+
+using nlohmann::json;
+
+// A location inside the document for messages: "<where>: /a/b/3".
+struct Loc {
+  std::string where;
+  std::string pointer;
+  Loc operator/(const std::string& key) const { return {where, pointer + "/" + key}; }
+  Loc operator/(size_t index) const { return {where, pointer + "/" + std::to_string(index)}; }
+  [[noreturn]] void Fail(const std::string& what) const {
+    std::string prefix = where.empty() ? "" : where + ": ";
+    throw ParseError(prefix + (pointer.empty() ? "/" : pointer) + ": " + what);
+  }
+};
+
+std::string TypeName(const json& j) { return j.type_name(); }
+
+const json& Field(const json& obj, const Loc& loc, const std::string& key) {
+  if (!obj.is_object()) loc.Fail("expected an object, found " + TypeName(obj));
+  const auto it = obj.find(key);
+  if (it == obj.end()) (loc / key).Fail("missing required field \"" + key + "\"");
+  return *it;
+}
+
+double Number(const json& j, const Loc& loc) {
+  if (!j.is_number()) loc.Fail("expected a number, found " + TypeName(j));
+  const double x = j.get<double>();
+  if (!std::isfinite(x)) loc.Fail("number is not finite");
+  return x;
+}
+
+int Integer(const json& j, const Loc& loc) {
+  if (!j.is_number_integer()) loc.Fail("expected an integer, found " + TypeName(j));
+  return j.get<int>();
+}
+
+const json& Array(const json& j, const Loc& loc) {
+  if (!j.is_array()) loc.Fail("expected an array, found " + TypeName(j));
+  return j;
+}
+
+int Degree(const json& obj, const Loc& loc, const std::string& key) {
+  const int p = Integer(Field(obj, loc, key), loc / key);
+  if (p < 1 || p > kMaxDegree) {
+    (loc / key).Fail("unsupported degree " + std::to_string(p) + " (supported: 1.." +
+                     std::to_string(kMaxDegree) + ")");
+  }
+  return p;
+}
+
+KnotVector Knots(const json& obj, const Loc& loc, const std::string& key, int degree) {
+  const Loc at = loc / key;
+  const json& arr = Array(Field(obj, loc, key), at);
+  std::vector<double> k;
+  for (size_t i = 0; i < arr.size(); ++i) k.push_back(Number(arr[i], at / i));
+  try {
+    return KnotVector(degree, std::move(k));
+  } catch (const std::invalid_argument& e) {
+    // KnotVector names the knot index; prefix the field's location.
+    std::string msg = e.what();
+    const std::string head = "knot vector: ";
+    if (msg.rfind(head, 0) == 0) msg = msg.substr(head.size());
+    at.Fail(msg);
+  }
+}
+
+double UnitScale(const json& obj, const Loc& loc) {
+  const auto it = obj.find("units");
+  if (it == obj.end()) return 1.0;
+  if (!it->is_string()) (loc / "units").Fail("expected a string, found " + TypeName(*it));
+  const std::string u = it->get<std::string>();
+  if (u == "m") return 1.0;
+  if (u == "mm") return 1e-3;
+  if (u == "cm") return 1e-2;
+  if (u == "in") return 0.0254;
+  (loc / "units").Fail("unknown unit \"" + u + "\" (expected m, cm, mm or in)");
+}
+
+template <int Dim>
+Eigen::Matrix<double, Dim, 1> Point(const json& j, const Loc& loc, double scale) {
+  const json& arr = Array(j, loc);
+  if (arr.size() != static_cast<size_t>(Dim)) {
+    loc.Fail("expected " + std::to_string(Dim) + " coordinates, found " +
+             std::to_string(arr.size()));
+  }
+  Eigen::Matrix<double, Dim, 1> x;
+  for (int d = 0; d < Dim; ++d) x[d] = scale * Number(arr[static_cast<size_t>(d)], loc / static_cast<size_t>(d));
+  return x;
+}
+
+double Weight(const json& j, const Loc& loc) {
+  const double w = Number(j, loc);
+  if (!(w > 0.0)) {
+    std::ostringstream os;
+    os << "weight " << w << " must be positive";
+    loc.Fail(os.str());
+  }
+  return w;
+}
+
+void CheckType(const json& j, const Loc& loc, const std::string& expected) {
+  const json& type = Field(j, loc, "type");
+  if (!type.is_string() || type.get<std::string>() != expected) {
+    (loc / "type").Fail("expected \"" + expected + "\", found " + type.dump());
+  }
+}
+
+json Json17(double x) { return json(x); }  // nlohmann writes doubles round-trip exactly.
+
+json ParseText(const std::string& text, const std::string& where) {
+  try {
+    return json::parse(text);
+  } catch (const json::exception& e) {
+    // Syntax errors (parse_error) and numbers beyond double range (out_of_range 406).
+    throw ParseError((where.empty() ? "" : where + ": ") + "invalid JSON: " + e.what());
+  }
+}
+
+}  // namespace
+
+NurbsSurface SurfaceFromJson(const json& j, const std::string& where) {
+  const Loc loc{where, ""};
+  CheckType(j, loc, "nurbs_surface");
+  const double scale = UnitScale(j, loc);
+  const int p = Degree(j, loc, "degree_u");
+  const int q = Degree(j, loc, "degree_v");
+  KnotVector ku = Knots(j, loc, "knots_u", p);
+  KnotVector kv = Knots(j, loc, "knots_v", q);
+  const int nu = ku.num_basis(), nv = kv.num_basis();
+  const Loc cl = loc / "control_points";
+  const json& rows = Array(Field(j, loc, "control_points"), cl);
+  if (rows.size() != static_cast<size_t>(nu)) {
+    cl.Fail("expected " + std::to_string(nu) + " rows (knots_u has " + std::to_string(ku.size()) +
+            " knots of degree " + std::to_string(p) + "), found " + std::to_string(rows.size()));
+  }
+  std::vector<Eigen::Vector3d> pts;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const json& row = Array(rows[i], cl / i);
+    if (row.size() != static_cast<size_t>(nv)) {
+      (cl / i).Fail("expected " + std::to_string(nv) + " control points (knots_v has " +
+                    std::to_string(kv.size()) + " knots of degree " + std::to_string(q) +
+                    "), found " + std::to_string(row.size()));
+    }
+    for (size_t jj = 0; jj < row.size(); ++jj) pts.push_back(Point<3>(row[jj], cl / i / jj, scale));
+  }
+  std::vector<double> w;
+  if (j.contains("weights")) {
+    const Loc wl = loc / "weights";
+    const json& wrows = Array(j["weights"], wl);
+    if (wrows.size() != static_cast<size_t>(nu)) {
+      wl.Fail("expected " + std::to_string(nu) + " rows, found " + std::to_string(wrows.size()));
+    }
+    for (size_t i = 0; i < wrows.size(); ++i) {
+      const json& row = Array(wrows[i], wl / i);
+      if (row.size() != static_cast<size_t>(nv)) {
+        (wl / i).Fail("expected " + std::to_string(nv) + " weights, found " +
+                      std::to_string(row.size()));
+      }
+      for (size_t jj = 0; jj < row.size(); ++jj) w.push_back(Weight(row[jj], wl / i / jj));
+    }
+  }
+  return NurbsSurface(std::move(ku), std::move(kv), pts, w);
+}
+
+template <int Dim>
+NurbsCurve<Dim> CurveFromJson(const json& j, const std::string& where) {
+  const Loc loc{where, ""};
+  CheckType(j, loc, "nurbs_curve");
+  const int dim = Integer(Field(j, loc, "dimension"), loc / "dimension");
+  if (dim != Dim) {
+    (loc / "dimension").Fail("expected a " + std::to_string(Dim) + "-D curve, found dimension " +
+                             std::to_string(dim));
+  }
+  const double scale = UnitScale(j, loc);
+  const int p = Degree(j, loc, "degree");
+  KnotVector k = Knots(j, loc, "knots", p);
+  const Loc cl = loc / "control_points";
+  const json& arr = Array(Field(j, loc, "control_points"), cl);
+  if (arr.size() != static_cast<size_t>(k.num_basis())) {
+    cl.Fail("expected " + std::to_string(k.num_basis()) + " control points (" +
+            std::to_string(k.size()) + " knots of degree " + std::to_string(p) + "), found " +
+            std::to_string(arr.size()));
+  }
+  std::vector<Eigen::Matrix<double, Dim, 1>> pts;
+  for (size_t i = 0; i < arr.size(); ++i) pts.push_back(Point<Dim>(arr[i], cl / i, scale));
+  std::vector<double> w;
+  if (j.contains("weights")) {
+    const Loc wl = loc / "weights";
+    const json& warr = Array(j["weights"], wl);
+    if (warr.size() != arr.size()) {
+      wl.Fail("expected " + std::to_string(arr.size()) + " weights, found " +
+              std::to_string(warr.size()));
+    }
+    for (size_t i = 0; i < warr.size(); ++i) w.push_back(Weight(warr[i], wl / i));
+  }
+  return NurbsCurve<Dim>(std::move(k), pts, w);
+}
+
+NurbsSurface ParseSurface(const std::string& text, const std::string& where) {
+  return SurfaceFromJson(ParseText(text, where), where);
+}
+
+template <int Dim>
+NurbsCurve<Dim> ParseCurve(const std::string& text, const std::string& where) {
+  return CurveFromJson<Dim>(ParseText(text, where), where);
+}
+
+NurbsSurface LoadSurface(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ParseError(path + ": cannot open file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ParseSurface(ss.str(), path);
+}
+
+json ToJson(const NurbsSurface& s) {
+  json j;
+  j["type"] = "nurbs_surface";
+  j["degree_u"] = s.degree_u();
+  j["degree_v"] = s.degree_v();
+  j["knots_u"] = s.knots_u().knots();
+  j["knots_v"] = s.knots_v().knots();
+  json pts = json::array(), ws = json::array();
+  for (int i = 0; i < s.num_u(); ++i) {
+    json row = json::array(), wrow = json::array();
+    for (int jj = 0; jj < s.num_v(); ++jj) {
+      const Eigen::Vector3d x = s.point(i, jj);
+      row.push_back({Json17(x.x()), Json17(x.y()), Json17(x.z())});
+      wrow.push_back(s.weight(i, jj));
+    }
+    pts.push_back(row);
+    ws.push_back(wrow);
+  }
+  j["control_points"] = pts;
+  if (s.IsRational()) j["weights"] = ws;
+  return j;
+}
+
+template <int Dim>
+json ToJson(const NurbsCurve<Dim>& c) {
+  json j;
+  j["type"] = "nurbs_curve";
+  j["dimension"] = Dim;
+  j["degree"] = c.degree();
+  j["knots"] = c.knots().knots();
+  json pts = json::array(), ws = json::array();
+  bool rational = false;
+  for (int i = 0; i < c.num_points(); ++i) {
+    json x = json::array();
+    for (int d = 0; d < Dim; ++d) x.push_back(c.point(i)[d]);
+    pts.push_back(x);
+    ws.push_back(c.weight(i));
+    rational = rational || c.weight(i) != c.weight(0);
+  }
+  j["control_points"] = pts;
+  if (rational) j["weights"] = ws;
+  return j;
+}
+
+template NurbsCurve<2> CurveFromJson<2>(const json&, const std::string&);
+template NurbsCurve<3> CurveFromJson<3>(const json&, const std::string&);
+template NurbsCurve<2> ParseCurve<2>(const std::string&, const std::string&);
+template NurbsCurve<3> ParseCurve<3>(const std::string&, const std::string&);
+template json ToJson(const NurbsCurve<2>&);
+template json ToJson(const NurbsCurve<3>&);
+
+}  // namespace tangent::nurbs

@@ -1,0 +1,45 @@
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "nurbs/curve.h"
+#include "nurbs/surface.h"
+
+namespace tangent::nurbs {
+
+/// A malformed curve or surface document. The message starts with the location of the problem
+/// as a JSON pointer (e.g. "/knots_u/4") prefixed by the caller's `where` (a file name or the
+/// enclosing scene path), then says what is wrong and what was expected.
+class ParseError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Surface from its JSON form (schema: docs/nurbs.md, "File format"):
+/// {"type": "nurbs_surface", "degree_u": p, "degree_v": q, "knots_u": [...], "knots_v": [...],
+///  "control_points": [[[x,y,z], ... num_v], ... num_u], "weights": [[w, ...], ...] (optional),
+///  "units": "m" | "mm" (optional, default "m"; coordinates are converted to metres)}.
+/// @throws ParseError naming the offending field and index.
+NurbsSurface SurfaceFromJson(const nlohmann::json& j, const std::string& where = "");
+/// Curve of dimension 2 or 3: {"type": "nurbs_curve", "dimension": 2|3, "degree": p,
+///  "knots": [...], "control_points": [[...], ...], "weights": [...] (optional), "units"}.
+template <int Dim>
+NurbsCurve<Dim> CurveFromJson(const nlohmann::json& j, const std::string& where = "");
+
+/// Parses text, then reads the surface/curve. JSON syntax errors become ParseError too.
+NurbsSurface ParseSurface(const std::string& text, const std::string& where = "");
+template <int Dim>
+NurbsCurve<Dim> ParseCurve(const std::string& text, const std::string& where = "");
+/// Reads a file. @throws ParseError (including when it cannot be opened).
+NurbsSurface LoadSurface(const std::string& path);
+
+/// The JSON form, in metres, weights included only for rational geometry. Round-trips exactly
+/// (doubles are written with 17 significant digits).
+nlohmann::json ToJson(const NurbsSurface& surface);
+template <int Dim>
+nlohmann::json ToJson(const NurbsCurve<Dim>& curve);
+
+}  // namespace tangent::nurbs
