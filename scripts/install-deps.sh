@@ -19,7 +19,8 @@ packages=(
   # Scenes and command lines.
   nlohmann-json3-dev libcli11-dev
   # Peers for cross-checks and benchmarks: Open CASCADE, IPOPT, NLopt.
-  libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
+  # (OCCT's CMake config links libtbb.so, which only libtbb-dev provides.)
+  libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev libtbb-dev
   coinor-libipopt-dev libnlopt-cxx-dev
 )
 
