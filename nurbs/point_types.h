@@ -55,6 +55,19 @@ inline void RationalQuotient(const HomogeneousSurfaceDerivs& h, int order, Surfa
   out->S_vv = (h.A[5].head<3>() - 2.0 * w_v * out->S_v - h.A[5][3] * out->S) * inv_w;
 }
 
+/// For a polynomial (non-rational) surface stored with w ≡ 1: S and its partials are the first
+/// three components, with no quotient.
+inline void PolynomialPart(const HomogeneousSurfaceDerivs& h, int order, SurfacePoint* out) {
+  out->S = h.A[0].head<3>();
+  if (order < 1) return;
+  out->S_u = h.A[1].head<3>();
+  out->S_v = h.A[2].head<3>();
+  if (order < 2) return;
+  out->S_uu = h.A[3].head<3>();
+  out->S_uv = h.A[4].head<3>();
+  out->S_vv = h.A[5].head<3>();
+}
+
 /// The quotient rule for curves: C = A/w, C' = (A' − w'C)/w, C'' = (A'' − 2w'C' − w''C)/w.
 template <int Dim>
 inline void RationalQuotient(const HomogeneousCurveDerivs<Dim>& h, int order,

@@ -430,7 +430,7 @@ void DerivativeBezierRows(const KnotVector& k, int mu, int a, AlphaRow* rows) {
 
 }  // namespace
 
-SpanFormSurface BuildSpanForm(const NurbsSurface& surface) {
+SpanFormSurface BuildSpanForm(const NurbsSurface& surface, double scale) {
   const KnotVector& ku = surface.knots_u();
   const KnotVector& kv = surface.knots_v();
   const int p = ku.degree();
@@ -457,7 +457,7 @@ SpanFormSurface BuildSpanForm(const NurbsSurface& surface) {
               }
               acc += ru[i][static_cast<size_t>(ii)] * row;
             }
-            nets.push_back(acc);
+            nets.push_back(scale * acc);
           }
         }
       }

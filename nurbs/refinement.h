@@ -66,7 +66,9 @@ CurvePoint<Dim> EvaluateByRefinement(const NurbsCurve<Dim>& curve, double t,
 
 namespace internal {
 /// Power-basis form of every span, built from the Oslo Bezier extraction.
-SpanFormSurface BuildSpanForm(const NurbsSurface& surface);
+/// Span form of every span (Bezier nets of A and its partials from Oslo blossoms), all
+/// homogeneous coordinates multiplied by `scale`.
+SpanFormSurface BuildSpanForm(const NurbsSurface& surface, double scale = 1.0);
 template <int Dim>
 SpanFormCurve<Dim> BuildSpanForm(const NurbsCurve<Dim>& curve);
 }  // namespace internal

@@ -1,25 +1,39 @@
 #include "nurbs/span_form.h"
 
+#include "nurbs/span_kernels.h"
+
 #include <algorithm>
+#include <cstdlib>
 #include <stdexcept>
 
 namespace tangent::nurbs {
 
 namespace internal {
 
+bool HasAvx2Fma() {
+  static const bool has = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  }();
+  return has;
+}
+
 int FindInterval(const std::vector<double>& breaks, double x, int hint) {
   const int last = static_cast<int>(breaks.size()) - 2;
-  auto inside = [&](int i) {
-    return i >= 0 && i <= last && breaks[static_cast<size_t>(i)] <= x &&
-           x < breaks[static_cast<size_t>(i + 1)];
-  };
-  if (inside(hint)) return hint;
-  if (inside(hint + 1)) return hint + 1;
-  if (inside(hint - 1)) return hint - 1;
-  if (!(x > breaks.front())) return 0;  // Also catches NaN: evaluates somewhere, never out of range.
-  if (x >= breaks.back()) return last;
-  const auto it = std::upper_bound(breaks.begin(), breaks.end(), x);
-  return std::clamp(static_cast<int>(it - breaks.begin()) - 1, 0, last);
+  const double* b = breaks.data();
+  // Coherent calls (a tracked contact) stay in their span: one predictable comparison.
+  if (hint >= 0 && hint <= last && b[hint] <= x && x < b[hint + 1]) return hint;
+  // Otherwise a branchless binary search: its trip count depends only on the span count, and
+  // the comparison compiles to a conditional move, so random queries cost no mispredictions
+  // (measured: a branchy search cost ~11 ns per random bicubic evaluation, a third of it).
+  int base = 0;
+  int len = last + 1;
+  while (len > 1) {
+    const int half = len / 2;
+    base = (b[base + half] <= x) ? base + half : base;
+    len -= half;
+  }
+  return base;  // x below the domain or NaN gives 0; x at or past the end gives the last span.
 }
 
 Eigen::MatrixXd BezierToPowerMatrix(int p) {
@@ -52,52 +66,6 @@ void BernsteinValues(int p, double s, double b[kMaxOrder + 1][kMaxDegree + 1]) {
 }
 
 namespace {
-
-// Horner scheme for a polynomial with vector coefficients c[0..n] (c[k] multiplies x^k) and its
-// first two derivatives. N > 0 fixes the degree at compile time so the loop unrolls.
-template <int N, int Order>
-inline void Horner(const Eigen::Vector4d* c, int n_runtime, double x, Eigen::Vector4d* d0,
-                   Eigen::Vector4d* d1, Eigen::Vector4d* d2) {
-  const int n = N > 0 ? N : n_runtime;
-  Eigen::Vector4d p0 = c[n];
-  Eigen::Vector4d p1 = Eigen::Vector4d::Zero();
-  Eigen::Vector4d p2 = Eigen::Vector4d::Zero();
-  for (int k = n - 1; k >= 0; --k) {
-    if constexpr (Order >= 2) p2 = p2 * x + p1;
-    if constexpr (Order >= 1) p1 = p1 * x + p0;
-    p0 = p0 * x + c[k];
-  }
-  *d0 = p0;
-  if constexpr (Order >= 1) *d1 = p1;
-  if constexpr (Order >= 2) *d2 = 2.0 * p2;
-}
-
-// Evaluates A and its partials on one span. Coefficient layout: C[a][b] at a*(q+1)+b.
-template <int P, int Q, int Order>
-void SurfaceKernel(const Eigen::Vector4d* c, int p_runtime, int q_runtime, double s, double t,
-                   double inv_hu, double inv_hv, HomogeneousSurfaceDerivs* out) {
-  const int p = P > 0 ? P : p_runtime;
-  const int q = Q > 0 ? Q : q_runtime;
-  // Rows r0[a] = Σ_b C[a][b] t^b and their t-derivatives r1, r2.
-  Eigen::Vector4d r0[kMaxDegree + 1], r1[kMaxDegree + 1], r2[kMaxDegree + 1];
-  for (int a = 0; a <= p; ++a) {
-    Horner<Q, Order>(c + a * (q + 1), q, t, &r0[a], &r1[a], &r2[a]);
-  }
-  Eigen::Vector4d unused1, unused2;
-  // In s: A, A_s, A_ss from r0; A_t, A_st from r1; A_tt from r2.
-  Horner<P, Order>(r0, p, s, &out->A[0], &out->A[1], &out->A[3]);
-  if constexpr (Order >= 1) {
-    Horner<P, Order - 1>(r1, p, s, &out->A[2], &out->A[4], &unused2);
-    out->A[1] *= inv_hu;
-    out->A[2] *= inv_hv;
-  }
-  if constexpr (Order >= 2) {
-    Horner<P, 0>(r2, p, s, &out->A[5], &unused1, &unused2);
-    out->A[3] *= inv_hu * inv_hu;
-    out->A[4] *= inv_hu * inv_hv;
-    out->A[5] *= inv_hv * inv_hv;
-  }
-}
 
 // Bernstein-form kernel for degrees above 3: the span holds the Bezier nets of A and of its
 // partials (already in u, v units), so evaluation only contracts with Bernstein values.
@@ -164,6 +132,7 @@ SpanFormSurface::SpanFormSurface(int p, int q, std::vector<double> breaks_u,
   for (size_t i = 0; i < nu; ++i) inv_h_u_.push_back(1.0 / (breaks_u_[i + 1] - breaks_u_[i]));
   for (size_t j = 0; j < nv; ++j) inv_h_v_.push_back(1.0 / (breaks_v_[j + 1] - breaks_v_[j]));
   power_ = p <= 3 && q <= 3;
+  bicubic_ = p == 3 && q == 3;
   if (!power_) {
     patch_size_ = in_size;
     coeffs_ = nets;
@@ -188,6 +157,12 @@ SpanFormSurface::SpanFormSurface(int p, int q, std::vector<double> breaks_u,
   kernels_[0] = internal::SelectKernel<0>(p, q);
   kernels_[1] = internal::SelectKernel<1>(p, q);
   kernels_[2] = internal::SelectKernel<2>(p, q);
+  avx2_ = bicubic_ && internal::HasAvx2Fma() && !std::getenv("TANGENT_NO_AVX2");
+  if (avx2_) {
+    for (int order = 0; order <= kMaxOrder; ++order) {
+      kernels_[order] = internal::BicubicKernelAvx2(order);
+    }
+  }
 }
 
 template <int Dim>

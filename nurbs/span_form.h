@@ -7,6 +7,7 @@
 
 #include "nurbs/knot_vector.h"
 #include "nurbs/point_types.h"
+#include "nurbs/span_kernels.h"
 
 namespace tangent::nurbs {
 
@@ -20,7 +21,7 @@ struct SpanHint {
 namespace internal {
 
 /// Index i with `breaks[i] <= x < breaks[i+1]`, clamped to [0, breaks.size() - 2]; tries `hint`
-/// and its neighbours before a binary search.
+/// first, then a branchless binary search.
 int FindInterval(const std::vector<double>& breaks, double x, int hint);
 
 /// Bernstein polynomials at s ∈ [0, 1] of degrees p, p−1, p−2: b[d][i] = B_{i,p−d}(s) (rows of
@@ -76,7 +77,11 @@ class SpanFormSurface {
     const double t = std::clamp((v - v0) * inv_hv, 0.0, 1.0);
     const Eigen::Vector4d* c =
         coeffs_.data() + static_cast<size_t>(i * num_spans_v() + j) * patch_size_;
-    kernels_[Order](c, p_, q_, s, t, inv_hu, inv_hv, out);
+    if (bicubic_ && !avx2_) {
+      internal::SurfaceKernel<3, 3, Order>(c, 3, 3, s, t, inv_hu, inv_hv, out);
+    } else {
+      kernels_[Order](c, p_, q_, s, t, inv_hu, inv_hv, out);
+    }
   }
 
   /// True when the pieces are held in the power basis (both degrees ≤ 3).
@@ -86,13 +91,14 @@ class SpanFormSurface {
   int num_spans_u() const { return static_cast<int>(breaks_u_.size()) - 1; }
   int num_spans_v() const { return static_cast<int>(breaks_v_.size()) - 1; }
 
-  using Kernel = void (*)(const Eigen::Vector4d* coeffs, int p, int q, double s, double t, double inv_hu,
-                          double inv_hv, HomogeneousSurfaceDerivs* out);
+  using Kernel = internal::SpanKernel;
 
  private:
   int p_ = 0;
   int q_ = 0;
   bool power_ = false;
+  bool bicubic_ = false;  // The common CAD case, dispatched without an indirect call ...
+  bool avx2_ = false;     // ... unless the CPU has AVX2 + FMA: then the intrinsics kernel.
   size_t patch_size_ = 0;  // (p+1)(q+1) homogeneous coefficients
   std::vector<double> breaks_u_, breaks_v_, inv_h_u_, inv_h_v_;
   // Per span, C[a][b] at a*(q+1)+b: the coefficient of s^a t^b (power basis) or the Bezier

@@ -82,7 +82,9 @@ NurbsSurface NurbsSurface::FromHomogeneous(KnotVector knots_u, KnotVector knots_
 void NurbsSurface::Finish() {
   rational_ = std::any_of(cpw_.begin(), cpw_.end(),
                           [&](const Eigen::Vector4d& h) { return h[3] != cpw_.front()[3]; });
-  fast_ = internal::BuildSpanForm(*this);
+  // A polynomial surface (all weights equal) is stored divided by its weight, so the fast path
+  // reads S directly and skips the quotient rule.
+  fast_ = internal::BuildSpanForm(*this, rational_ ? 1.0 : 1.0 / cpw_.front()[3]);
 }
 
 SurfacePoint NurbsSurface::Evaluate(double u, double v, int order) const {

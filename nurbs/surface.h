@@ -51,7 +51,11 @@ class NurbsSurface {
   void Evaluate(double u, double v, SpanHint* hint, SurfacePoint* out) const {
     HomogeneousSurfaceDerivs h;
     fast_.Evaluate<Order>(u, v, hint, &h);
-    RationalQuotient(h, Order, out);
+    if (rational_) {
+      RationalQuotient(h, Order, out);
+    } else {
+      PolynomialPart(h, Order, out);  // The span form was built with w ≡ 1: no quotient.
+    }
   }
   /// Convenience form of the fast path (order 0..2) without coherence.
   SurfacePoint Evaluate(double u, double v, int order = kMaxOrder) const;
