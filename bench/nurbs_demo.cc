@@ -30,8 +30,8 @@ double MaxPathDisagreement(const NurbsSurface& s, std::mt19937_64& rng, int n) {
     const SurfacePoint o = EvaluateByRefinement(s, u, v);
     const double scale = std::max({r.S_uu.norm(), r.S_uv.norm(), r.S_vv.norm()});
     for (const SurfacePoint* x : {&f, &o}) {
-      worst = std::max({worst, (x->S_uu - r.S_uu).norm() / scale,
-                        (x->S_uv - r.S_uv).norm() / scale, (x->S_vv - r.S_vv).norm() / scale});
+      worst = std::max({worst, (x->S_uu - r.S_uu).norm() / scale, (x->S_uv - r.S_uv).norm() / scale,
+                        (x->S_vv - r.S_vv).norm() / scale});
     }
   }
   return worst;
@@ -51,14 +51,17 @@ void Run(const std::string& obj_path) {
       {"torus R=30mm r=5mm", MakeTorus(0.03, 0.005), 10e-6},
       {"paperclip wire r=0.45mm", MakeTube(PaperclipPath(), kPaperclipWireRadius), 10e-6},
       {"sheared bicubic 15deg", MakeShearedPatch(15 * deg, 0.05, 0.005, true), 10e-6},
-      {"height-grid bicubic", MakeHeightGridPatch(0, 0, 0.05, 0.05, {{0, 1e-3, 0, 2e-3, 0},
-                                                                   {1e-3, 3e-3, 1e-3, 0, 1e-3},
-                                                                   {0, 1e-3, 4e-3, 1e-3, 0},
-                                                                   {2e-3, 0, 1e-3, 3e-3, 0},
-                                                                   {0, 1e-3, 0, 1e-3, 0}}),
+      {"height-grid bicubic",
+       MakeHeightGridPatch(0, 0, 0.05, 0.05,
+                           {{0, 1e-3, 0, 2e-3, 0},
+                            {1e-3, 3e-3, 1e-3, 0, 1e-3},
+                            {0, 1e-3, 4e-3, 1e-3, 0},
+                            {2e-3, 0, 1e-3, 3e-3, 0},
+                            {0, 1e-3, 0, 1e-3, 0}}),
        10e-6},
   };
-  std::printf("NURBS kernel demo: primitives, path agreement, certified tessellation (tol 10 um)\n");
+  std::printf(
+      "NURBS kernel demo: primitives, path agreement, certified tessellation (tol 10 um)\n");
   std::printf("%-26s %6s %6s %10s %9s %11s %11s %9s\n", "surface", "ctrl", "spans", "paths_rel",
               "triangles", "bound_um", "sampled_um", "ms");
   for (const Item& it : items) {
@@ -74,8 +77,16 @@ void Run(const std::string& obj_path) {
     for (int k = 0; k < 20000; ++k) {
       const double u = m.u_lines.front() + unit(rng) * (m.u_lines.back() - m.u_lines.front());
       const double v = m.v_lines.front() + unit(rng) * (m.v_lines.back() - m.v_lines.front());
-      const int i = std::clamp(static_cast<int>(std::upper_bound(m.u_lines.begin(), m.u_lines.end(), u) - m.u_lines.begin()) - 1, 0, static_cast<int>(m.u_lines.size()) - 2);
-      const int j = std::clamp(static_cast<int>(std::upper_bound(m.v_lines.begin(), m.v_lines.end(), v) - m.v_lines.begin()) - 1, 0, nv - 2);
+      const int i =
+          std::clamp(static_cast<int>(std::upper_bound(m.u_lines.begin(), m.u_lines.end(), u) -
+                                      m.u_lines.begin()) -
+                         1,
+                     0, static_cast<int>(m.u_lines.size()) - 2);
+      const int j =
+          std::clamp(static_cast<int>(std::upper_bound(m.v_lines.begin(), m.v_lines.end(), v) -
+                                      m.v_lines.begin()) -
+                         1,
+                     0, nv - 2);
       const Eigen::Vector3d x = s.Evaluate(u, v, 0).S;
       const auto& V = m.vertices;
       const int a = i * nv + j, b = (i + 1) * nv + j, c = (i + 1) * nv + j + 1, d = i * nv + j + 1;
@@ -90,19 +101,22 @@ void Run(const std::string& obj_path) {
     if (!obj_path.empty() && std::string(it.name).rfind("paperclip", 0) == 0) {
       std::ofstream obj(obj_path);
       for (const auto& p : m.vertices) obj << "v " << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
-      for (const auto& t : m.triangles) obj << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
+      for (const auto& t : m.triangles)
+        obj << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
     }
   }
   double radius_error = 0.0;
   const NurbsSurface unit_sphere = MakeSphere(Eigen::Vector3d::Zero(), 1.0);
   for (int i = 0; i <= 400; ++i) {
     for (int j = 0; j <= 400; ++j) {
-      radius_error = std::max(radius_error, std::abs(unit_sphere.Evaluate(i / 400.0, j / 400.0, 0).S.norm() - 1.0));
+      radius_error = std::max(
+          radius_error, std::abs(unit_sphere.Evaluate(i / 400.0, j / 400.0, 0).S.norm() - 1.0));
     }
   }
   std::printf("\nunit sphere radius error over 401x401 samples incl. poles: %.1e\n", radius_error);
-  std::printf("paths_rel: max relative disagreement of fast and refinement second derivatives\n"
-              "with the reference path over 2000 random points.\n");
+  std::printf(
+      "paths_rel: max relative disagreement of fast and refinement second derivatives\n"
+      "with the reference path over 2000 random points.\n");
   if (!obj_path.empty()) std::printf("paperclip mesh written to %s\n", obj_path.c_str());
 }
 

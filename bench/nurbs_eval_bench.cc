@@ -145,9 +145,8 @@ void RegisterOrder(const Case& c, const std::string& pattern, const Params* p) {
                                [&c, p](benchmark::State& s) { OursReference<Order>(s, c, *p); });
   benchmark::RegisterBenchmark((d + "/ours_refinement" + suffix).c_str(),
                                [&c, p](benchmark::State& s) { OursRefinement<Order>(s, c, *p); });
-  benchmark::RegisterBenchmark((d + "/occt_geom" + suffix).c_str(), [&c, p](benchmark::State& s) {
-    Occt<Order>(s, *c.occt, *p);
-  });
+  benchmark::RegisterBenchmark((d + "/occt_geom" + suffix).c_str(),
+                               [&c, p](benchmark::State& s) { Occt<Order>(s, *c.occt, *p); });
   benchmark::RegisterBenchmark((d + "/occt_adaptor" + suffix).c_str(),
                                [&c, p](benchmark::State& s) {
                                  GeomAdaptor_Surface adaptor(c.occt);  // One cache per run.
@@ -179,8 +178,8 @@ class RatioReporter : public benchmark::ConsoleReporter {
 
 void PrintSummary(const RatioReporter& r) {
   std::printf("\nSurface evaluation, ns per point (median), and ratios (same run):\n");
-  std::printf("%-6s %-12s %-7s %10s %10s %10s %10s %10s\n", "order", "case", "pattern",
-              "ours_fast", "reference", "refinement", "occt_geom", "occt_adapt");
+  std::printf("%-6s %-12s %-7s %10s %10s %10s %10s %10s\n", "order", "case", "pattern", "ours_fast",
+              "reference", "refinement", "occt_geom", "occt_adapt");
   for (const char* order : {"D0", "D1", "D2"}) {
     for (const Case& c : Cases()) {
       for (const char* pattern : {"random", "span", "walk"}) {
@@ -193,8 +192,9 @@ void PrintSummary(const RatioReporter& r) {
       }
     }
   }
-  std::printf("\nTargets (D2, bicubic): fast at random (u,v) <= 1/8 of occt_geom at random, and\n"
-              "<= 1/3 of occt_adaptor evaluated inside one span.\n");
+  std::printf(
+      "\nTargets (D2, bicubic): fast at random (u,v) <= 1/8 of occt_geom at random, and\n"
+      "<= 1/3 of occt_adaptor evaluated inside one span.\n");
   for (const Case& c : Cases()) {
     const double fast_random = r.Get("D2/ours_fast/" + c.name + "/random");
     const double fast_span = r.Get("D2/ours_fast/" + c.name + "/span");

@@ -93,7 +93,8 @@ Eigen::Matrix<double, Dim, 1> Point(const json& j, const Loc& loc, double scale)
              std::to_string(arr.size()));
   }
   Eigen::Matrix<double, Dim, 1> x;
-  for (int d = 0; d < Dim; ++d) x[d] = scale * Number(arr[static_cast<size_t>(d)], loc / static_cast<size_t>(d));
+  for (int d = 0; d < Dim; ++d)
+    x[d] = scale * Number(arr[static_cast<size_t>(d)], loc / static_cast<size_t>(d));
   return x;
 }
 
@@ -177,8 +178,9 @@ NurbsCurve<Dim> CurveFromJson(const json& j, const std::string& where) {
   CheckType(j, loc, "nurbs_curve");
   const int dim = Integer(Field(j, loc, "dimension"), loc / "dimension");
   if (dim != Dim) {
-    (loc / "dimension").Fail("expected a " + std::to_string(Dim) + "-D curve, found dimension " +
-                             std::to_string(dim));
+    (loc / "dimension")
+        .Fail("expected a " + std::to_string(Dim) + "-D curve, found dimension " +
+              std::to_string(dim));
   }
   const double scale = UnitScale(j, loc);
   const int p = Degree(j, loc, "degree");

@@ -39,8 +39,8 @@ void ValidateKnots(int degree, std::span<const double> knots, const std::string&
     const bool interior = knots[i] > knots[p] && knots[i] < knots[n];
     if ((interior && mult > p) || mult > p + 1) {
       std::ostringstream os;
-      os << "knot value " << knots[i] << " at [" << i << "] repeats " << mult
-         << " times; at most " << (interior ? p : p + 1) << " allowed for degree " << degree;
+      os << "knot value " << knots[i] << " at [" << i << "] repeats " << mult << " times; at most "
+         << (interior ? p : p + 1) << " allowed for degree " << degree;
       fail(os.str());
     }
     i = j;
@@ -77,9 +77,7 @@ std::vector<double> KnotVector::Breakpoints() const {
 int KnotVector::FindSpan(double t, int hint) const {
   const int p = degree_;
   const int n = num_basis();
-  auto in_span = [&](int k) {
-    return k >= p && k < n && (*this)[k] <= t && t < (*this)[k + 1];
-  };
+  auto in_span = [&](int k) { return k >= p && k < n && (*this)[k] <= t && t < (*this)[k + 1]; };
   if (hint >= p && hint < n) {
     if (in_span(hint)) return hint;
     if (in_span(hint + 1)) return hint + 1;

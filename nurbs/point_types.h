@@ -21,9 +21,9 @@ struct SurfacePoint {
 template <int Dim>
 struct CurvePoint {
   using Vec = Eigen::Matrix<double, Dim, 1>;
-  Vec C;    ///< C(t)
-  Vec C1;   ///< C'(t)
-  Vec C2;   ///< C''(t)
+  Vec C;   ///< C(t)
+  Vec C1;  ///< C'(t)
+  Vec C2;  ///< C''(t)
 };
 
 /// Derivatives of the homogeneous (weighted) surface A(u,v) = (w·S, w), in the order

@@ -20,7 +20,7 @@ struct CircleNet {
 
 CircleNet UnitCircle(double r) {
   CircleNet c;
-  const double pts[9][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0},
+  const double pts[9][2] = {{1, 0},   {1, 1},  {0, 1},  {-1, 1}, {-1, 0},
                             {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
   for (int i = 0; i < 9; ++i) {
     c.points.emplace_back(r * pts[i][0], r * pts[i][1]);
@@ -37,10 +37,12 @@ void RevolveArc(const Eigen::Vector3d& center, double rho, double z, double w, d
   const double half = 0.5 * (phi1 - phi0);
   const double cos_half = std::cos(half);
   const double phim = phi0 + half;
-  const Eigen::Vector3d p0 = center + Eigen::Vector3d(rho * std::cos(phi0), rho * std::sin(phi0), z);
+  const Eigen::Vector3d p0 =
+      center + Eigen::Vector3d(rho * std::cos(phi0), rho * std::sin(phi0), z);
   const Eigen::Vector3d p1 =
       center + Eigen::Vector3d(rho * std::cos(phim) / cos_half, rho * std::sin(phim) / cos_half, z);
-  const Eigen::Vector3d p2 = center + Eigen::Vector3d(rho * std::cos(phi1), rho * std::sin(phi1), z);
+  const Eigen::Vector3d p2 =
+      center + Eigen::Vector3d(rho * std::cos(phi1), rho * std::sin(phi1), z);
   out[0] << w * p0, w;
   out[1] << w * cos_half * p1, w * cos_half;
   out[2] << w * p2, w;
@@ -169,7 +171,8 @@ NurbsSurface MakeTube(const std::vector<PathSegment>& path, double radius,
       const Eigen::Vector2d c2 = pos + sign * big_r * n;  // Centre on the turning side.
       const Eigen::Vector3d center(c2.x(), c2.y(), 0.0);
       double phi = std::atan2(pos.y() - c2.y(), pos.x() - c2.x());
-      const int parts = static_cast<int>(std::ceil(std::abs(seg.angle) / (std::numbers::pi / 2) - 1e-12));
+      const int parts =
+          static_cast<int>(std::ceil(std::abs(seg.angle) / (std::numbers::pi / 2) - 1e-12));
       const double step = seg.angle / parts;
       for (int part = 0; part < parts; ++part) {
         std::vector<Eigen::Vector4d> r[3];
@@ -178,7 +181,8 @@ NurbsSurface MakeTube(const std::vector<PathSegment>& path, double radius,
           // Left normal is −sign·radial, so the section point sits at rho = R − sign·a.
           const double rho = big_r - sign * a.x();
           Eigen::Vector4d arc[3];
-          RevolveArc(center, rho, a.y(), section.weights[static_cast<size_t>(j)], phi, phi + step, arc);
+          RevolveArc(center, rho, a.y(), section.weights[static_cast<size_t>(j)], phi, phi + step,
+                     arc);
           for (int k = 0; k < 3; ++k) r[k].push_back(arc[k]);
         }
         for (int k = (rows.empty() ? 0 : 1); k < 3; ++k) rows.push_back(r[k]);
@@ -211,9 +215,9 @@ NurbsSurface MakeTube(const std::vector<PathSegment>& path, double radius,
 std::vector<PathSegment> PaperclipPath() {
   const double mm = 1e-3;
   const double pi = std::numbers::pi;
-  return {PathSegment::Line(16 * mm),          PathSegment::Arc(2.5 * mm, pi),
-          PathSegment::Line(22 * mm),          PathSegment::Arc(3.25 * mm, pi),
-          PathSegment::Line(25 * mm),          PathSegment::Arc(4.0 * mm, pi),
+  return {PathSegment::Line(16 * mm), PathSegment::Arc(2.5 * mm, pi),
+          PathSegment::Line(22 * mm), PathSegment::Arc(3.25 * mm, pi),
+          PathSegment::Line(25 * mm), PathSegment::Arc(4.0 * mm, pi),
           PathSegment::Line(16 * mm)};
 }
 

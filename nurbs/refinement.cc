@@ -96,8 +96,7 @@ NurbsSurface ApplyAlpha(const NurbsSurface& surface, Direction dir, const AlphaM
     }
   }
   return NurbsSurface::FromHomogeneous(in_u ? std::move(knots) : surface.knots_u(),
-                                       in_u ? surface.knots_v() : std::move(knots),
-                                       std::move(cpw));
+                                       in_u ? surface.knots_v() : std::move(knots), std::move(cpw));
 }
 
 // Alpha matrix restricting a spline on `k` to [lo, hi] inside its domain, clamped at both ends:
@@ -180,7 +179,8 @@ std::vector<HPoint> BoehmInsert(const KnotVector& k, const std::vector<HPoint>& 
     q[static_cast<size_t>(i + times)] = pw[static_cast<size_t>(i)];
   }
   std::vector<HPoint> r(static_cast<size_t>(p + 1));
-  for (int i = 0; i <= p - s; ++i) r[static_cast<size_t>(i)] = pw[static_cast<size_t>(span - p + i)];
+  for (int i = 0; i <= p - s; ++i)
+    r[static_cast<size_t>(i)] = pw[static_cast<size_t>(span - p + i)];
   int l = 0;
   for (int j = 1; j <= times; ++j) {
     l = span - p + j;
@@ -494,7 +494,7 @@ template SpanFormCurve<3> BuildSpanForm(const NurbsCurve<3>&);
 
 }  // namespace internal
 
-#define TANGENT_INSTANTIATE_CURVE_OPS(D)                                                  \
+#define TANGENT_INSTANTIATE_CURVE_OPS(D)                                                \
   template NurbsCurve<D> RefineKnots(const NurbsCurve<D>&, const KnotVector&);          \
   template NurbsCurve<D> InsertKnot(const NurbsCurve<D>&, double, int);                 \
   template std::vector<NurbsCurve<D>> ExtractBezier(const NurbsCurve<D>&);              \

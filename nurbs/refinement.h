@@ -61,8 +61,7 @@ std::pair<NurbsSurface, NurbsSurface> Split(const NurbsSurface& surface, Directi
 SurfacePoint EvaluateByRefinement(const NurbsSurface& surface, double u, double v,
                                   int order = kMaxOrder);
 template <int Dim>
-CurvePoint<Dim> EvaluateByRefinement(const NurbsCurve<Dim>& curve, double t,
-                                     int order = kMaxOrder);
+CurvePoint<Dim> EvaluateByRefinement(const NurbsCurve<Dim>& curve, double t, int order = kMaxOrder);
 
 namespace internal {
 /// Power-basis form of every span, built from the Oslo Bezier extraction.

@@ -40,7 +40,8 @@ Eigen::MatrixXd BezierToPowerMatrix(int p) {
   Eigen::MatrixXd binom = Eigen::MatrixXd::Zero(p + 1, p + 1);
   for (int n = 0; n <= p; ++n) {
     binom(n, 0) = 1.0;
-    for (int k = 1; k <= n; ++k) binom(n, k) = binom(n - 1, k - 1) + (k <= n - 1 ? binom(n - 1, k) : 0.0);
+    for (int k = 1; k <= n; ++k)
+      binom(n, k) = binom(n - 1, k - 1) + (k <= n - 1 ? binom(n - 1, k) : 0.0);
   }
   Eigen::MatrixXd m = Eigen::MatrixXd::Zero(p + 1, p + 1);
   for (int k = 0; k <= p; ++k) {
@@ -70,8 +71,8 @@ namespace {
 // Bernstein-form kernel for degrees above 3: the span holds the Bezier nets of A and of its
 // partials (already in u, v units), so evaluation only contracts with Bernstein values.
 template <int Order>
-void BernsteinKernel(const Eigen::Vector4d* c, int p, int q, double s, double t, double,
-                     double, HomogeneousSurfaceDerivs* out) {
+void BernsteinKernel(const Eigen::Vector4d* c, int p, int q, double s, double t, double, double,
+                     HomogeneousSurfaceDerivs* out) {
   double bu[kMaxOrder + 1][kMaxDegree + 1], bv[kMaxOrder + 1][kMaxDegree + 1];
   BernsteinValues(p, s, bu);
   BernsteinValues(q, t, bv);

@@ -97,8 +97,8 @@ class SpanFormSurface {
   int p_ = 0;
   int q_ = 0;
   bool power_ = false;
-  bool bicubic_ = false;  // The common CAD case, dispatched without an indirect call ...
-  bool avx2_ = false;     // ... unless the CPU has AVX2 + FMA: then the intrinsics kernel.
+  bool bicubic_ = false;   // The common CAD case, dispatched without an indirect call ...
+  bool avx2_ = false;      // ... unless the CPU has AVX2 + FMA: then the intrinsics kernel.
   size_t patch_size_ = 0;  // (p+1)(q+1) homogeneous coefficients
   std::vector<double> breaks_u_, breaks_v_, inv_h_u_, inv_h_v_;
   // Per span, C[a][b] at a*(q+1)+b: the coefficient of s^a t^b (power basis) or the Bezier

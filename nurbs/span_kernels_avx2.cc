@@ -72,9 +72,12 @@ void Bicubic(const Eigen::Vector4d* coeffs, int, int, double s, double t, double
 
 SpanKernel BicubicKernelAvx2(int order) {
   switch (order) {
-    case 0: return &Bicubic<0>;
-    case 1: return &Bicubic<1>;
-    default: return &Bicubic<2>;
+    case 0:
+      return &Bicubic<0>;
+    case 1:
+      return &Bicubic<1>;
+    default:
+      return &Bicubic<2>;
   }
 }
 

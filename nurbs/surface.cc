@@ -26,9 +26,8 @@ NurbsSurface::NurbsSurface(KnotVector knots_u, KnotVector knots_v,
   if (points.size() != n) {
     std::ostringstream os;
     os << "NURBS surface: " << points.size() << " control points given; knot vectors of "
-       << knots_u_.size() << " (degree " << degree_u() << ") and " << knots_v_.size()
-       << " (degree " << degree_v() << ") knots need " << num_u() << " x " << num_v() << " = "
-       << n;
+       << knots_u_.size() << " (degree " << degree_u() << ") and " << knots_v_.size() << " (degree "
+       << degree_v() << ") knots need " << num_u() << " x " << num_v() << " = " << n;
     throw std::invalid_argument(os.str());
   }
   if (!weights.empty() && weights.size() != n) {
@@ -56,13 +55,14 @@ NurbsSurface::NurbsSurface(KnotVector knots_u, KnotVector knots_v,
   Finish();
 }
 
-NurbsSurface::NurbsSurface(KnotVector knots_u, KnotVector knots_v,
-                           std::vector<Eigen::Vector4d> cpw, int)
+NurbsSurface::NurbsSurface(KnotVector knots_u, KnotVector knots_v, std::vector<Eigen::Vector4d> cpw,
+                           int)
     : knots_u_(std::move(knots_u)), knots_v_(std::move(knots_v)), cpw_(std::move(cpw)) {}
 
 NurbsSurface NurbsSurface::FromHomogeneous(KnotVector knots_u, KnotVector knots_v,
                                            std::vector<Eigen::Vector4d> weighted_points) {
-  const size_t n = static_cast<size_t>(knots_u.num_basis()) * static_cast<size_t>(knots_v.num_basis());
+  const size_t n =
+      static_cast<size_t>(knots_u.num_basis()) * static_cast<size_t>(knots_v.num_basis());
   if (weighted_points.size() != n) {
     throw std::invalid_argument("NURBS surface: " + std::to_string(weighted_points.size()) +
                                 " homogeneous control points given, knot vectors need " +
@@ -91,9 +91,15 @@ SurfacePoint NurbsSurface::Evaluate(double u, double v, int order) const {
   SpanHint hint;
   SurfacePoint out;
   switch (order) {
-    case 0: Evaluate<0>(u, v, &hint, &out); break;
-    case 1: Evaluate<1>(u, v, &hint, &out); break;
-    default: Evaluate<2>(u, v, &hint, &out); break;
+    case 0:
+      Evaluate<0>(u, v, &hint, &out);
+      break;
+    case 1:
+      Evaluate<1>(u, v, &hint, &out);
+      break;
+    default:
+      Evaluate<2>(u, v, &hint, &out);
+      break;
   }
   return out;
 }

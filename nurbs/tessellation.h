@@ -11,10 +11,10 @@ namespace tangent::nurbs {
 
 /// A triangle mesh of a surface. Vertices lie on the surface and carry their parameters.
 struct TriangleMesh {
-  std::vector<Eigen::Vector3d> vertices;       ///< S(u, v), surface frame, metres
-  std::vector<Eigen::Vector2d> uv;             ///< (u, v) of each vertex
-  std::vector<std::array<int, 3>> triangles;   ///< vertex indices, counter-clockwise in (u, v)
-  std::vector<double> u_lines, v_lines;        ///< the parameter grid the mesh is built on
+  std::vector<Eigen::Vector3d> vertices;      ///< S(u, v), surface frame, metres
+  std::vector<Eigen::Vector2d> uv;            ///< (u, v) of each vertex
+  std::vector<std::array<int, 3>> triangles;  ///< vertex indices, counter-clockwise in (u, v)
+  std::vector<double> u_lines, v_lines;       ///< the parameter grid the mesh is built on
   /// Certified bound: every surface point S(u, v) is within this distance of the mesh; more
   /// precisely, of one of the two triangles of the grid cell that contains (u, v).
   double error_bound = 0.0;

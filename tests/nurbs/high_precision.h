@@ -69,9 +69,11 @@ inline SurfacePoint EvaluateHighPrecision(const NurbsSurface& s, double u_in, do
   HP A = t[0][0];
   HP Au = Real(p) / hu * (t[1][0] - t[0][0]);
   HP Av = Real(q) / hv * (t[0][1] - t[0][0]);
-  HP Auu = p >= 2 ? HP(Real(p * (p - 1)) / (hu * hu) * (t[2][0] - 2 * t[1][0] + t[0][0])) : HP::Zero();
+  HP Auu =
+      p >= 2 ? HP(Real(p * (p - 1)) / (hu * hu) * (t[2][0] - 2 * t[1][0] + t[0][0])) : HP::Zero();
   HP Auv = Real(p * q) / (hu * hv) * (t[1][1] - t[1][0] - t[0][1] + t[0][0]);
-  HP Avv = q >= 2 ? HP(Real(q * (q - 1)) / (hv * hv) * (t[0][2] - 2 * t[0][1] + t[0][0])) : HP::Zero();
+  HP Avv =
+      q >= 2 ? HP(Real(q * (q - 1)) / (hv * hv) * (t[0][2] - 2 * t[0][1] + t[0][0])) : HP::Zero();
   using V = Eigen::Matrix<Real, 3, 1>;
   const Real w = A[3];
   const V S = A.head<3>() / w;

@@ -85,7 +85,8 @@ TEST(JsonIoTest, KnotErrorsNameTheKnot) {
 TEST(JsonIoTest, ControlPointAndWeightErrorsNameTheEntry) {
   json j = GoodSurface();
   j["control_points"][1].erase(1);
-  ExpectError(j, "/control_points/1: expected 2 control points (knots_v has 4 knots of degree 1), found 1");
+  ExpectError(
+      j, "/control_points/1: expected 2 control points (knots_v has 4 knots of degree 1), found 1");
   j = GoodSurface();
   j["control_points"][2][1] = {1.0, 2.0};
   ExpectError(j, "/control_points/2/1: expected 3 coordinates, found 2");

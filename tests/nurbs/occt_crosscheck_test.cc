@@ -46,8 +46,8 @@ TEST(OcctCrossCheckTest, AllPathsAgreeWithOpenCascadeOnRandomSurfaces) {
   for (const auto& d : degrees) {
     for (bool rational : {false, true}) {
       for (bool clamped : {true, false}) {
-        const NurbsSurface s = testing::RandomSurface(rng, d[0], d[1], d[0] + 5, d[1] + 4,
-                                                      rational, clamped);
+        const NurbsSurface s =
+            testing::RandomSurface(rng, d[0], d[1], d[0] + 5, d[1] + 4, rational, clamped);
         const Handle(Geom_BSplineSurface) occt = testing::ToOcct(s);
         GeomAdaptor_Surface adaptor(occt);
         for (int k = 0; k < 200; ++k) {
@@ -76,8 +76,8 @@ TEST(OcctCrossCheckTest, AllPathsAgreeWithOpenCascadeOnRandomSurfaces) {
               const double e = FamilyError(ours[path], geom, order);
               worst[path] = std::max(worst[path], e);
               ASSERT_LT(e, tol) << "path " << path << " order " << order << " degree " << d[0]
-                                << "x" << d[1] << " rational " << rational << " clamped "
-                                << clamped << " at " << u << ", " << v;
+                                << "x" << d[1] << " rational " << rational << " clamped " << clamped
+                                << " at " << u << ", " << v;
               // And every path against the truth, at the bar, without OCCT's help.
               if (path < 3) {
                 worst_truth = std::max(worst_truth, FamilyError(ours[path], ours[3], order));
@@ -96,11 +96,12 @@ TEST(OcctCrossCheckTest, AllPathsAgreeWithOpenCascadeOnRandomSurfaces) {
   RecordProperty("worst_fast", std::to_string(worst[0]));
   RecordProperty("worst_reference", std::to_string(worst[1]));
   RecordProperty("worst_refinement", std::to_string(worst[2]));
-  std::printf("worst relative error vs OCCT: fast %.2e, reference %.2e, refinement %.2e, "
-              "long double %.2e; OCCT adaptor vs OCCT geom %.2e\n"
-              "worst relative error of our three paths vs the long-double truth: %.2e; "
-              "samples where OCCT's own error exceeded 5e-13: %d\n",
-              worst[0], worst[1], worst[2], worst[3], worst_occt_cache, worst_truth, occt_limited);
+  std::printf(
+      "worst relative error vs OCCT: fast %.2e, reference %.2e, refinement %.2e, "
+      "long double %.2e; OCCT adaptor vs OCCT geom %.2e\n"
+      "worst relative error of our three paths vs the long-double truth: %.2e; "
+      "samples where OCCT's own error exceeded 5e-13: %d\n",
+      worst[0], worst[1], worst[2], worst[3], worst_occt_cache, worst_truth, occt_limited);
 }
 
 TEST(OcctCrossCheckTest, CurvesAgreeWithOpenCascade) {

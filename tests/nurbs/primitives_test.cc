@@ -54,7 +54,7 @@ TEST(PrimitivesTest, CylinderAndTorusRadii) {
     const double ring = p.S.head<2>().norm() - 0.05;
     worst_torus = std::max(worst_torus, std::abs(std::hypot(ring, p.S.z()) - 0.01));
   });
-  EXPECT_LE(worst_cyl, 1e-16);   // 0.02 m radius: 1e-16 m is ~30 ulp.
+  EXPECT_LE(worst_cyl, 1e-16);  // 0.02 m radius: 1e-16 m is ~30 ulp.
   EXPECT_LE(worst_torus, 1e-16);
 }
 

@@ -40,8 +40,8 @@ inline KnotVector RandomKnots(std::mt19937_64& rng, int p, int n, bool clamped,
   return KnotVector(p, std::move(k));
 }
 
-inline NurbsSurface RandomSurface(std::mt19937_64& rng, int p, int q, int nu, int nv,
-                                  bool rational, bool clamped = true) {
+inline NurbsSurface RandomSurface(std::mt19937_64& rng, int p, int q, int nu, int nv, bool rational,
+                                  bool clamped = true) {
   std::uniform_real_distribution<double> coord(-1.0, 1.0);
   std::uniform_real_distribution<double> weight(0.5, 2.0);
   KnotVector ku = RandomKnots(rng, p, nu, clamped);

@@ -41,7 +41,8 @@ TEST(RefinementTest, OsloRefinementKeepsSurfaceOver10kSamples) {
   double worst = 0.0;
   for (int k = 0; k < 10000; ++k) {
     const double u = RandomParam(rng, s.knots_u()), v = RandomParam(rng, s.knots_v());
-    worst = std::max(worst, (EvaluateReference(r, u, v, 0).S - EvaluateReference(s, u, v, 0).S).norm());
+    worst =
+        std::max(worst, (EvaluateReference(r, u, v, 0).S - EvaluateReference(s, u, v, 0).S).norm());
   }
   EXPECT_LE(worst, kGeomTol);
   RecordProperty("max_deviation", std::to_string(worst));
@@ -85,9 +86,12 @@ TEST(RefinementTest, BezierExtractionAndSplitKeepGeometry) {
   for (int k = 0; k < 10000; ++k) {
     const double u = RandomParam(rng, s.knots_u()), v = RandomParam(rng, s.knots_v());
     const Eigen::Vector3d x = EvaluateReference(s, u, v, 0).S;
-    const size_t i = static_cast<size_t>(std::upper_bound(bu.begin(), bu.end(), u) - bu.begin() - 1);
-    const size_t j = static_cast<size_t>(std::upper_bound(bv.begin(), bv.end(), v) - bv.begin() - 1);
-    const NurbsSurface& patch = patches[std::min(i, bu.size() - 2) * (bv.size() - 1) + std::min(j, bv.size() - 2)];
+    const size_t i =
+        static_cast<size_t>(std::upper_bound(bu.begin(), bu.end(), u) - bu.begin() - 1);
+    const size_t j =
+        static_cast<size_t>(std::upper_bound(bv.begin(), bv.end(), v) - bv.begin() - 1);
+    const NurbsSurface& patch =
+        patches[std::min(i, bu.size() - 2) * (bv.size() - 1) + std::min(j, bv.size() - 2)];
     worst = std::max(worst, (EvaluateReference(patch, u, v, 0).S - x).norm());
     const NurbsSurface& half = u < left.knots_u().domain_end() ? left : right;
     worst = std::max(worst, (EvaluateReference(half, u, v, 0).S - x).norm());

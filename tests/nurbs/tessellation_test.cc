@@ -21,8 +21,16 @@ double SampledError(const NurbsSurface& s, const TriangleMesh& m, std::mt19937_6
   for (int k = 0; k < n; ++k) {
     const double u = testing::RandomParam(rng, s.knots_u());
     const double v = testing::RandomParam(rng, s.knots_v());
-    const int i = std::clamp(static_cast<int>(std::upper_bound(m.u_lines.begin(), m.u_lines.end(), u) - m.u_lines.begin()) - 1, 0, static_cast<int>(m.u_lines.size()) - 2);
-    const int j = std::clamp(static_cast<int>(std::upper_bound(m.v_lines.begin(), m.v_lines.end(), v) - m.v_lines.begin()) - 1, 0, nv - 2);
+    const int i =
+        std::clamp(static_cast<int>(std::upper_bound(m.u_lines.begin(), m.u_lines.end(), u) -
+                                    m.u_lines.begin()) -
+                       1,
+                   0, static_cast<int>(m.u_lines.size()) - 2);
+    const int j =
+        std::clamp(static_cast<int>(std::upper_bound(m.v_lines.begin(), m.v_lines.end(), v) -
+                                    m.v_lines.begin()) -
+                       1,
+                   0, nv - 2);
     const Eigen::Vector3d x = EvaluateReference(s, u, v, 0).S;
     const auto& V = m.vertices;
     const int a = i * nv + j, b = (i + 1) * nv + j, c = (i + 1) * nv + j + 1, d = i * nv + j + 1;
