@@ -6,6 +6,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 bash scripts/build.sh
-./build/bench/tangent_nurbs_demo
-./build/bench/nurbs_eval_bench --benchmark_min_time=0.2 --benchmark_out=build/nurbs_eval_bench.json \
+./build/bench/tangent_nurbs_demo --obj build/paperclip.obj
+# Medians of 3 repetitions; the JSON (for scripts) goes to build/nurbs_eval_bench.json.
+./build/bench/nurbs_eval_bench --benchmark_min_time=0.05 --benchmark_repetitions=3 \
+  --benchmark_report_aggregates_only=true --benchmark_out=build/nurbs_eval_bench.json \
   --benchmark_out_format=json
