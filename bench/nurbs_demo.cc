@@ -71,27 +71,12 @@ void Run(const std::string& obj_path) {
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     // Dense check of the bound: each sample against its own cell's two triangles.
-    const int nv = static_cast<int>(m.v_lines.size());
     double sampled = 0.0;
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     for (int k = 0; k < 20000; ++k) {
       const double u = m.u_lines.front() + unit(rng) * (m.u_lines.back() - m.u_lines.front());
       const double v = m.v_lines.front() + unit(rng) * (m.v_lines.back() - m.v_lines.front());
-      const int i =
-          std::clamp(static_cast<int>(std::upper_bound(m.u_lines.begin(), m.u_lines.end(), u) -
-                                      m.u_lines.begin()) -
-                         1,
-                     0, static_cast<int>(m.u_lines.size()) - 2);
-      const int j =
-          std::clamp(static_cast<int>(std::upper_bound(m.v_lines.begin(), m.v_lines.end(), v) -
-                                      m.v_lines.begin()) -
-                         1,
-                     0, nv - 2);
-      const Eigen::Vector3d x = s.Evaluate(u, v, 0).S;
-      const auto& V = m.vertices;
-      const int a = i * nv + j, b = (i + 1) * nv + j, c = (i + 1) * nv + j + 1, d = i * nv + j + 1;
-      sampled = std::max(sampled, std::min(PointTriangleDistance(x, V[a], V[b], V[c]),
-                                           PointTriangleDistance(x, V[a], V[c], V[d])));
+      sampled = std::max(sampled, DistanceToCell(m, u, v, s.Evaluate(u, v, 0).S));
     }
     std::printf("%-26s %6zu %6zu %10.1e %9zu %11.3f %11.3f %9.1f%s\n", it.name,
                 s.weighted_points().size(),

@@ -99,21 +99,12 @@ void OursFast(benchmark::State& state, const Case& c, const Params& p) {
   }
 }
 
-template <int Order>
-void OursReference(benchmark::State& state, const Case& c, const Params& p) {
+// A slow path (reference or refinement): a free function of (surface, u, v, order).
+template <int Order, SurfacePoint (*Path)(const NurbsSurface&, double, double, int)>
+void OursPath(benchmark::State& state, const Case& c, const Params& p) {
   size_t i = 0;
   for (auto _ : state) {
-    SurfacePoint out = EvaluateReference(c.surface, p.u[i], p.v[i], Order);
-    benchmark::DoNotOptimize(out);
-    i = (i + 1) & (kNumParams - 1);
-  }
-}
-
-template <int Order>
-void OursRefinement(benchmark::State& state, const Case& c, const Params& p) {
-  size_t i = 0;
-  for (auto _ : state) {
-    SurfacePoint out = EvaluateByRefinement(c.surface, p.u[i], p.v[i], Order);
+    SurfacePoint out = Path(c.surface, p.u[i], p.v[i], Order);
     benchmark::DoNotOptimize(out);
     i = (i + 1) & (kNumParams - 1);
   }
@@ -141,10 +132,12 @@ void RegisterOrder(const Case& c, const std::string& pattern, const Params* p) {
   const std::string d = "D" + std::to_string(Order);
   benchmark::RegisterBenchmark((d + "/ours_fast" + suffix).c_str(),
                                [&c, p](benchmark::State& s) { OursFast<Order>(s, c, *p); });
-  benchmark::RegisterBenchmark((d + "/ours_reference" + suffix).c_str(),
-                               [&c, p](benchmark::State& s) { OursReference<Order>(s, c, *p); });
-  benchmark::RegisterBenchmark((d + "/ours_refinement" + suffix).c_str(),
-                               [&c, p](benchmark::State& s) { OursRefinement<Order>(s, c, *p); });
+  benchmark::RegisterBenchmark(
+      (d + "/ours_reference" + suffix).c_str(),
+      [&c, p](benchmark::State& s) { OursPath<Order, &EvaluateReference>(s, c, *p); });
+  benchmark::RegisterBenchmark(
+      (d + "/ours_refinement" + suffix).c_str(),
+      [&c, p](benchmark::State& s) { OursPath<Order, &EvaluateByRefinement>(s, c, *p); });
   benchmark::RegisterBenchmark((d + "/occt_geom" + suffix).c_str(),
                                [&c, p](benchmark::State& s) { Occt<Order>(s, *c.occt, *p); });
   benchmark::RegisterBenchmark((d + "/occt_adaptor" + suffix).c_str(),

@@ -156,6 +156,23 @@ TriangleMesh Tessellate(const NurbsSurface& surface, double tolerance, int max_l
   return mesh;
 }
 
+double DistanceToCell(const TriangleMesh& mesh, double u, double v, const Eigen::Vector3d& x) {
+  auto cell = [](const std::vector<double>& lines, double t) {
+    const auto it = std::upper_bound(lines.begin(), lines.end(), t);
+    return std::clamp(static_cast<int>(it - lines.begin()) - 1, 0,
+                      static_cast<int>(lines.size()) - 2);
+  };
+  const int i = cell(mesh.u_lines, u);
+  const int j = cell(mesh.v_lines, v);
+  const int nv = static_cast<int>(mesh.v_lines.size());
+  const auto& p = mesh.vertices;
+  const size_t a = static_cast<size_t>(i * nv + j), b = static_cast<size_t>((i + 1) * nv + j);
+  const size_t c = b + 1, d = a + 1;
+  // The same (0,0)–(1,1) diagonal split as Tessellate's triangles.
+  return std::min(PointTriangleDistance(x, p[a], p[b], p[c]),
+                  PointTriangleDistance(x, p[a], p[c], p[d]));
+}
+
 double PointTriangleDistance(const Eigen::Vector3d& x, const Eigen::Vector3d& a,
                              const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   // Ericson, Real-Time Collision Detection §5.1.5: classify x against the Voronoi regions.

@@ -35,6 +35,10 @@ struct TriangleMesh {
 /// @throws std::invalid_argument when tolerance is not positive.
 TriangleMesh Tessellate(const NurbsSurface& surface, double tolerance, int max_lines = 4097);
 
+/// Distance from x to the two triangles of the grid cell of `mesh` that contains (u, v)
+/// (clamped to the grid). For x = S(u, v) this is at most `mesh.error_bound`.
+double DistanceToCell(const TriangleMesh& mesh, double u, double v, const Eigen::Vector3d& x);
+
 /// Distance from point x to triangle (a, b, c) (closest point by Voronoi regions).
 double PointTriangleDistance(const Eigen::Vector3d& x, const Eigen::Vector3d& a,
                              const Eigen::Vector3d& b, const Eigen::Vector3d& c);

@@ -16,26 +16,11 @@ namespace {
 
 // Largest distance from dense random samples to their cell's triangles.
 double SampledError(const NurbsSurface& s, const TriangleMesh& m, std::mt19937_64& rng, int n) {
-  const int nv = static_cast<int>(m.v_lines.size());
   double worst = 0.0;
   for (int k = 0; k < n; ++k) {
     const double u = testing::RandomParam(rng, s.knots_u());
     const double v = testing::RandomParam(rng, s.knots_v());
-    const int i =
-        std::clamp(static_cast<int>(std::upper_bound(m.u_lines.begin(), m.u_lines.end(), u) -
-                                    m.u_lines.begin()) -
-                       1,
-                   0, static_cast<int>(m.u_lines.size()) - 2);
-    const int j =
-        std::clamp(static_cast<int>(std::upper_bound(m.v_lines.begin(), m.v_lines.end(), v) -
-                                    m.v_lines.begin()) -
-                       1,
-                   0, nv - 2);
-    const Eigen::Vector3d x = EvaluateReference(s, u, v, 0).S;
-    const auto& V = m.vertices;
-    const int a = i * nv + j, b = (i + 1) * nv + j, c = (i + 1) * nv + j + 1, d = i * nv + j + 1;
-    worst = std::max(worst, std::min(PointTriangleDistance(x, V[a], V[b], V[c]),
-                                     PointTriangleDistance(x, V[a], V[c], V[d])));
+    worst = std::max(worst, DistanceToCell(m, u, v, EvaluateReference(s, u, v, 0).S));
   }
   return worst;
 }
