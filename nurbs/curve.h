@@ -12,7 +12,7 @@ namespace tangent::nurbs {
 
 /// A rational B-spline (NURBS) curve of degree 1..9 in `Dim` = 2 (trimming loops in a
 /// parameter domain) or 3 (space curves) dimensions, stored with homogeneous control points
-/// (w·P, w). Immutable; `Evaluate` (the fast power-basis path) is the default.
+/// (w·P, w). Immutable; `Evaluate` (the fast per-span path, as for surfaces) is the default.
 template <int Dim>
 class NurbsCurve {
  public:

@@ -13,13 +13,18 @@ namespace {
 
 using AlphaRow = std::array<double, kMaxDegree + 1>;
 
-// Alpha row for the Bezier point `a` (0..p) of the segment from `from` towards `to` inside old
-// span `mu`: the blossom at (from^(p−a), to^a).
-void BezierRow(const KnotVector& knots, int mu, double from, double to, int a, AlphaRow* row) {
+// Bezier net of the a-th derivative of the piece on span mu over [t_mu, t_mu+1]: point i is
+// p!/(p−a)! · b(t_mu^{p−a−i}, t_mu+1^i, δ^a); a = 0 gives the span's Bezier net, i = 0..p−a.
+void DerivativeBezierRows(const KnotVector& k, int mu, int a, AlphaRow* rows) {
+  const int p = k.degree();
+  double factor = 1.0;
+  for (int r = 0; r < a; ++r) factor *= p - r;
   double x[kMaxDegree];
-  const int p = knots.degree();
-  for (int r = 0; r < p; ++r) x[r] = r < p - a ? from : to;
-  OsloAlphaRow(knots, mu, x, row);
+  for (int i = 0; i <= p - a; ++i) {
+    for (int r = 0; r < p; ++r) x[r] = r < p - a - i ? k[mu] : k[mu + 1];
+    OsloAlphaRow(k, mu, x, &rows[i], a);
+    for (int j = 0; j <= p; ++j) rows[i][static_cast<size_t>(j)] *= factor;
+  }
 }
 
 // Non-empty spans of the domain, as old-knot indices mu.
@@ -257,12 +262,12 @@ namespace {
 template <class HPoint>
 void CurveBezierNet(const KnotVector& k, const std::vector<HPoint>& pw, int mu, HPoint* net) {
   const int p = k.degree();
-  AlphaRow row;
+  AlphaRow rows[kMaxDegree + 1];
+  DerivativeBezierRows(k, mu, 0, rows);
   for (int a = 0; a <= p; ++a) {
-    BezierRow(k, mu, k[mu], k[mu + 1], a, &row);
     net[a].setZero();
     for (int i = 0; i <= p; ++i) {
-      net[a] += row[static_cast<size_t>(i)] * pw[static_cast<size_t>(mu - p + i)];
+      net[a] += rows[a][static_cast<size_t>(i)] * pw[static_cast<size_t>(mu - p + i)];
     }
   }
 }
@@ -274,8 +279,8 @@ void SurfaceBezierNet(const NurbsSurface& s, int mu_u, int mu_v, Eigen::Vector4d
   const int p = ku.degree();
   const int q = kv.degree();
   AlphaRow ru[kMaxDegree + 1], rv[kMaxDegree + 1];
-  for (int a = 0; a <= p; ++a) BezierRow(ku, mu_u, ku[mu_u], ku[mu_u + 1], a, &ru[a]);
-  for (int b = 0; b <= q; ++b) BezierRow(kv, mu_v, kv[mu_v], kv[mu_v + 1], b, &rv[b]);
+  DerivativeBezierRows(ku, mu_u, 0, ru);
+  DerivativeBezierRows(kv, mu_v, 0, rv);
   for (int a = 0; a <= p; ++a) {
     for (int b = 0; b <= q; ++b) {
       Eigen::Vector4d acc = Eigen::Vector4d::Zero();
@@ -411,24 +416,6 @@ CurvePoint<Dim> EvaluateByRefinement(const NurbsCurve<Dim>& curve, double t, int
 }
 
 namespace internal {
-
-namespace {
-
-// Bezier net of the a-th derivative of the piece on span mu over [t0, t1]: point i is
-// p!/(p−a)! · b(t0^{p−a−i}, t1^i, δ^a), i = 0..p−a.
-void DerivativeBezierRows(const KnotVector& k, int mu, int a, AlphaRow* rows) {
-  const int p = k.degree();
-  double factor = 1.0;
-  for (int r = 0; r < a; ++r) factor *= p - r;
-  double x[kMaxDegree];
-  for (int i = 0; i <= p - a; ++i) {
-    for (int r = 0; r < p; ++r) x[r] = r < p - a - i ? k[mu] : k[mu + 1];
-    OsloAlphaRow(k, mu, x, &rows[i], a);
-    for (int j = 0; j <= p; ++j) rows[i][static_cast<size_t>(j)] *= factor;
-  }
-}
-
-}  // namespace
 
 SpanFormSurface BuildSpanForm(const NurbsSurface& surface, double scale) {
   const KnotVector& ku = surface.knots_u();

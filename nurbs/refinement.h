@@ -64,10 +64,10 @@ template <int Dim>
 CurvePoint<Dim> EvaluateByRefinement(const NurbsCurve<Dim>& curve, double t, int order = kMaxOrder);
 
 namespace internal {
-/// Power-basis form of every span, built from the Oslo Bezier extraction.
-/// Span form of every span (Bezier nets of A and its partials from Oslo blossoms), all
+/// Span form of every surface span (Bezier nets of A and its partials from Oslo blossoms), all
 /// homogeneous coordinates multiplied by `scale`.
 SpanFormSurface BuildSpanForm(const NurbsSurface& surface, double scale = 1.0);
+/// Span form of every curve span (Bezier nets of C, C', C'' from Oslo blossoms).
 template <int Dim>
 SpanFormCurve<Dim> BuildSpanForm(const NurbsCurve<Dim>& curve);
 }  // namespace internal

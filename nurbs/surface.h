@@ -14,7 +14,7 @@ namespace tangent::nurbs {
 /// S(u,v) = Σ N_i(u) M_j(v) w_ij P_ij / Σ N_i(u) M_j(v) w_ij, in its own frame.
 /// Control points are stored homogeneous, P^w_ij = (w_ij P_ij, w_ij), row-major in u:
 /// index `i * num_v() + j`. Immutable; construction validates the input and precomputes the
-/// per-span power-basis form that `Evaluate` (the fast path, the default) uses.
+/// per-span form (SpanFormSurface) that `Evaluate` (the fast path, the default) uses.
 class NurbsSurface {
  public:
   /// @param points `num_u * num_v` Cartesian control points (index i·num_v + j), metres.
