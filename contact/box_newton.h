@@ -1,0 +1,160 @@
+#pragma once
+
+// Damped Newton on a box (the parameter domains), shared by the extremal-distance solvers.
+// Internal header: templated on the problem size N (2, 3, 4), fixed-size Eigen only, so a call
+// allocates nothing.
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace tangent::contact::internal {
+
+/// What a problem provides at x: the interior system (equations regular at contact) and the
+/// gradient / Hessian of ½|d|², used when some parameters sit on the domain boundary.
+template <int N>
+struct NewtonSystem {
+  Eigen::Matrix<double, N, 1> F;
+  Eigen::Matrix<double, N, N> J;
+  Eigen::Matrix<double, N, 1> grad;
+  Eigen::Matrix<double, N, N> hess;
+};
+
+template <int N>
+struct BoxNewtonResult {
+  Eigen::Matrix<double, N, 1> x;
+  std::array<bool, N> active{};  ///< parameter held on the domain boundary
+  int iterations = 0;
+  bool converged = false;
+  bool singular = false;  ///< the final Newton matrix was (numerically) singular
+  double rcond = 0.0;     ///< reciprocal condition estimate of the final Newton matrix
+};
+
+template <int N>
+struct BoxNewtonOptions {
+  int max_iterations = 40;
+  double step_tolerance = 1e-13;  ///< on each step component divided by its domain width
+  double singular_rcond = 1e-12;  ///< below: Levenberg–Marquardt step, reported singular
+};
+
+// The system in use: interior equations, or the gradient form with active rows pinned.
+template <int N>
+void ActiveSystem(const NewtonSystem<N>& s, const std::array<bool, N>& active, bool any_active,
+                  Eigen::Matrix<double, N, 1>* r, Eigen::Matrix<double, N, N>* a) {
+  if (!any_active) {
+    *r = s.F;
+    *a = s.J;
+    return;
+  }
+  *r = s.grad;
+  *a = s.hess;
+  for (int i = 0; i < N; ++i) {
+    if (!active[static_cast<size_t>(i)]) continue;
+    (*r)[i] = 0.0;
+    a->row(i).setZero();
+    a->col(i).setZero();
+    (*a)(i, i) = 1.0;
+  }
+}
+
+// Newton step for a r + δ = 0 with a fallback to Levenberg–Marquardt when a is singular.
+template <int N>
+Eigen::Matrix<double, N, 1> NewtonStep(const Eigen::Matrix<double, N, 1>& r,
+                                       const Eigen::Matrix<double, N, N>& a, double singular_rcond,
+                                       double* rcond) {
+  const Eigen::FullPivLU<Eigen::Matrix<double, N, N>> lu(a);
+  *rcond = lu.rcond();
+  if (*rcond > singular_rcond && std::isfinite(*rcond)) return lu.solve(-r);
+  // Damped least squares: the step of smallest norm that reduces |r| along well-determined
+  // directions; a continuum of solutions (concentric spheres) then stays put.
+  const Eigen::Matrix<double, N, N> ata = a.transpose() * a;
+  const double mu = 1e-10 * std::max(ata.trace() / N, 1e-300);
+  return (ata + mu * Eigen::Matrix<double, N, N>::Identity()).ldlt().solve(-a.transpose() * r);
+}
+
+/// Runs damped Newton from x0 inside [lo, hi]. `eval(x, &system)` fills the system at x.
+template <int N, class Eval>
+BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
+                             const Eigen::Matrix<double, N, 1>& lo,
+                             const Eigen::Matrix<double, N, 1>& hi,
+                             const BoxNewtonOptions<N>& opt) {
+  using Vec = Eigen::Matrix<double, N, 1>;
+  using Mat = Eigen::Matrix<double, N, N>;
+  BoxNewtonResult<N> res;
+  res.x = x0.cwiseMax(lo).cwiseMin(hi);
+  const Vec width = (hi - lo).cwiseMax(1e-300);
+  NewtonSystem<N> sys;
+  int releases = 0;
+  for (res.iterations = 0; res.iterations < opt.max_iterations; ++res.iterations) {
+    eval(res.x, &sys);
+    const bool any = std::any_of(res.active.begin(), res.active.end(), [](bool b) { return b; });
+    Vec r;
+    Mat a;
+    ActiveSystem<N>(sys, res.active, any, &r, &a);
+    Vec step = NewtonStep<N>(r, a, opt.singular_rcond, &res.rcond);
+    res.singular = !(res.rcond > opt.singular_rcond);
+    if (!step.allFinite()) break;
+    // Longest fraction of the step that stays in the box.
+    double alpha = 1.0;
+    for (int i = 0; i < N; ++i) {
+      if (step[i] > 0 && res.x[i] + step[i] > hi[i]) alpha = std::min(alpha, (hi[i] - res.x[i]) / step[i]);
+      if (step[i] < 0 && res.x[i] + step[i] < lo[i]) alpha = std::min(alpha, (lo[i] - res.x[i]) / step[i]);
+    }
+    // Backtrack on the residual norm of the same system (the merit for saddles and maxima too).
+    const double r0 = r.norm();
+    Vec trial = res.x;
+    NewtonSystem<N> tsys;
+    double a_try = alpha;
+    for (int k = 0; k < 30; ++k) {
+      trial = (res.x + a_try * step).cwiseMax(lo).cwiseMin(hi);
+      eval(trial, &tsys);
+      Vec rt;
+      Mat at;
+      ActiveSystem<N>(tsys, res.active, any, &rt, &at);
+      if (rt.norm() <= (1.0 - 1e-4 * a_try) * r0 || rt.norm() == 0.0 || a_try < 1e-9) break;
+      a_try *= 0.5;
+    }
+    res.x = trial;
+    // Parameters that reached the boundary while the step pushed outward become active.
+    bool hit = false;
+    for (int i = 0; i < N; ++i) {
+      if (res.active[static_cast<size_t>(i)]) continue;
+      if ((res.x[i] <= lo[i] && step[i] < 0) || (res.x[i] >= hi[i] && step[i] > 0)) {
+        res.active[static_cast<size_t>(i)] = true;
+        hit = true;
+      }
+    }
+    if (hit) continue;
+    // Converged when the Newton step itself (not a backtracked fraction) is negligible.
+    if (step.cwiseQuotient(width).cwiseAbs().maxCoeff() > opt.step_tolerance) continue;
+    // Converged for the current active set. Release a boundary parameter when the interior
+    // Newton step points back into the domain (the extremum is not on this boundary).
+    if (any && releases < 2 * N) {
+      eval(res.x, &sys);
+      double rc = 0.0;
+      const Vec free_step = NewtonStep<N>(sys.F, sys.J, opt.singular_rcond, &rc);
+      bool released = false;
+      for (int i = 0; i < N; ++i) {
+        if (!res.active[static_cast<size_t>(i)]) continue;
+        const bool inward = (res.x[i] <= lo[i] && free_step[i] > 0) ||
+                            (res.x[i] >= hi[i] && free_step[i] < 0);
+        if (inward) {
+          res.active[static_cast<size_t>(i)] = false;
+          released = true;
+        }
+      }
+      if (released) {
+        ++releases;
+        continue;
+      }
+    }
+    res.converged = true;
+    ++res.iterations;
+    break;
+  }
+  return res;
+}
+
+}  // namespace tangent::contact::internal

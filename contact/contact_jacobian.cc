@@ -1,0 +1,221 @@
+#include "contact/contact_jacobian.h"
+
+#include <Eigen/LU>
+
+namespace tangent::contact {
+
+namespace internal {
+
+Eigen::Matrix3d ContactFrame(const PlacedSurfacePoint& p) {
+  Eigen::Matrix3d r;
+  r.col(0) = p.world.S_u.normalized();
+  r.col(2) = p.N.normalized();
+  r.col(1) = r.col(2).cross(r.col(0));
+  return r;
+}
+
+}  // namespace internal
+
+namespace {
+
+// Derivative of the unit normal n = N/|N| along a parameter, given N's derivative.
+Eigen::Vector3d UnitNormalDerivative(const Eigen::Vector3d& N, const Eigen::Vector3d& N_x) {
+  const double len = N.norm();
+  const Eigen::Vector3d n = N / len;
+  return (N_x - n * n.dot(N_x)) / len;
+}
+
+// Inverse of a 2 x 2 matrix; false when its determinant is negligible against its entries.
+bool Inverse2(const Eigen::Matrix2d& m, Eigen::Matrix2d* inv) {
+  const double det = m.determinant();
+  // 1e-13 relative: a 2x2 determinant of entries O(s) is computed to ~1e-16 s²; below 1e-13 s²
+  // its inverse carries fewer than three correct digits.
+  const double scale = m.cwiseAbs().maxCoeff();
+  if (!(std::abs(det) > 1e-13 * scale * scale)) return false;
+  *inv << m(1, 1), -m(0, 1), -m(1, 0), m(0, 0);
+  *inv /= det;
+  return true;
+}
+
+// E = [x y]ᵀ [S_u S_v] and F = [x y]ᵀ [n_u n_v] in the surface's own contact frame.
+void FundamentalBlocks(const PlacedSurfacePoint& p, const Eigen::Matrix3d& frame,
+                       Eigen::Matrix2d* E, Eigen::Matrix2d* F) {
+  const Eigen::Matrix<double, 2, 3> P = frame.leftCols<2>().transpose();
+  E->col(0) = P * p.world.S_u;
+  E->col(1) = P * p.world.S_v;
+  F->col(0) = P * UnitNormalDerivative(p.N, p.N_u);
+  F->col(1) = P * UnitNormalDerivative(p.N, p.N_v);
+}
+
+}  // namespace
+
+bool ContactJacobianImplicit(const SurfacePairEval& e, const BodyPose& pose_f,
+                             const BodyPose& pose_g, Matrix4x14* u_q) {
+  u_q->setZero();
+  const nurbs::SurfacePoint& fb = e.f.body;
+  const nurbs::SurfacePoint& gb = e.g.body;
+  const nurbs::SurfacePoint& gw = e.g.world;
+  // ∂d/∂q = [∂f/∂q_F, −∂g/∂q_G]; ∂g_s/∂q_G, ∂g_t/∂q_G, ∂N_f/∂q_F rotate body-fixed vectors.
+  Matrix3x14 d_q;
+  d_q << PointJacobian(pose_f, fb.S), -PointJacobian(pose_g, gb.S);
+  Matrix3x14 gs_q = Matrix3x14::Zero(), gt_q = Matrix3x14::Zero(), N_q = Matrix3x14::Zero();
+  gs_q.rightCols<7>() = DirectionJacobian(pose_g, gb.S_u);
+  gt_q.rightCols<7>() = DirectionJacobian(pose_g, gb.S_v);
+  N_q.leftCols<7>() = DirectionJacobian(pose_f, fb.S_u.cross(fb.S_v));
+  Matrix4x14 F_q;
+  F_q.row(0) = gw.S_u.transpose() * d_q + e.d.transpose() * gs_q;
+  F_q.row(1) = gw.S_v.transpose() * d_q + e.d.transpose() * gt_q;
+  F_q.row(2) = gw.S_u.transpose() * N_q + e.f.N.transpose() * gs_q;
+  F_q.row(3) = gw.S_v.transpose() * N_q + e.f.N.transpose() * gt_q;
+  const Eigen::FullPivLU<Eigen::Matrix4d> lu(e.F_u);
+  if (!(lu.rcond() > 1e-12)) return false;
+  *u_q = -lu.solve(F_q);
+  return true;
+}
+
+Matrix4x14 RelativeVelocityMap(const BodyPose& pose_f, const BodyPose& pose_g,
+                               const Eigen::Vector3d& p_g, const Eigen::Matrix3d& frame) {
+  // v = V_G(p) − V_F(p) with V_B(p) = ṗ_B + w_B × (p − p_B), w_B = omega_map_B Q̇_B;
+  // w = w_G − w_F. Then rows x, y of each in the given frame.
+  const Eigen::Matrix<double, 2, 3> P = frame.leftCols<2>().transpose();
+  Matrix4x14 b;
+  b.block<2, 3>(0, 0) = -P;
+  b.block<2, 4>(0, 3) = P * Skew(p_g - pose_f.q.head<3>()) * pose_f.omega_map;
+  b.block<2, 3>(0, 7) = P;
+  b.block<2, 4>(0, 10) = -P * Skew(p_g - pose_g.q.head<3>()) * pose_g.omega_map;
+  b.block<2, 3>(2, 0).setZero();
+  b.block<2, 4>(2, 3) = -P * pose_f.omega_map;
+  b.block<2, 3>(2, 7).setZero();
+  b.block<2, 4>(2, 10) = P * pose_g.omega_map;
+  return b;
+}
+
+bool ContactJacobianClosedForm(const SurfacePairEval& e, const BodyPose& pose_f,
+                               const BodyPose& pose_g, Matrix4x14* u_q) {
+  u_q->setZero();
+  const Eigen::Matrix3d frame_f = internal::ContactFrame(e.f);
+  const Eigen::Matrix3d frame_g = internal::ContactFrame(e.g);
+  Eigen::Matrix2d Ef, Ff, Eg, Fg;
+  FundamentalBlocks(e.f, frame_f, &Ef, &Ff);
+  FundamentalBlocks(e.g, frame_g, &Eg, &Fg);
+  const Eigen::Matrix2d R = frame_g.leftCols<2>().transpose() * frame_f.leftCols<2>();
+  const double beta = e.d.dot(frame_g.col(2));
+  const double sigma = frame_f.col(2).dot(frame_g.col(2)) < 0 ? -1.0 : 1.0;
+  // Blocks of M and the 2 x 2 elimination sequence (pivot on R_θ E_f, regular for any regular f).
+  const Eigen::Matrix2d M11 = R * Ef;
+  const Eigen::Matrix2d M12 = -(Eg + beta * Fg);
+  const Eigen::Matrix2d M21 = R * Ff;
+  const Eigen::Matrix2d M22 = -sigma * Fg;
+  Eigen::Matrix2d iM11, iH;
+  if (!Inverse2(M11, &iM11)) return false;
+  const Eigen::Matrix2d M21iM11 = M21 * iM11;
+  const Eigen::Matrix2d H = M22 - M21iM11 * M12;
+  if (!Inverse2(H, &iH)) return false;
+  // Right-hand side map C: (v_x, v_y, ω_x, ω_y) ↦ [v_xy + β ω_(y,−x); σ ω_(y,−x)],
+  // ω_(y,−x) = K ω_xy with K = [0 1; −1 0].
+  Eigen::Matrix2d K;
+  K << 0, 1, -1, 0;
+  Eigen::Matrix<double, 2, 4> C1, C2;
+  C1 << Eigen::Matrix2d::Identity(), beta * K;
+  C2 << Eigen::Matrix2d::Zero(), sigma * K;
+  // u_g = iH (b2 − M21 iM11 b1);  u_f = iM11 (b1 − M12 u_g).
+  Eigen::Matrix4d A;
+  const Eigen::Matrix<double, 2, 4> Ag = iH * (C2 - M21iM11 * C1);
+  A.topRows<2>() = iM11 * (C1 - M12 * Ag);
+  A.bottomRows<2>() = Ag;
+  *u_q = A * RelativeVelocityMap(pose_f, pose_g, e.g.world.S, frame_g);
+  return true;
+}
+
+bool ContactJacobianMontana(const SurfacePairEval& e, const BodyPose& pose_f,
+                            const BodyPose& pose_g, Matrix4x14* u_q) {
+  u_q->setZero();
+  const Eigen::Matrix3d frame_f = internal::ContactFrame(e.f);
+  const Eigen::Matrix3d frame_g = internal::ContactFrame(e.g);
+  Eigen::Matrix2d Ef, Ff, Eg, Fg, iEf, iEg;
+  FundamentalBlocks(e.f, frame_f, &Ef, &Ff);
+  FundamentalBlocks(e.g, frame_g, &Eg, &Fg);
+  if (!Inverse2(Ef, &iEf) || !Inverse2(Eg, &iEg)) return false;
+  const Eigen::Matrix2d R = frame_g.leftCols<2>().transpose() * frame_f.leftCols<2>();
+  const double beta = e.d.dot(frame_g.col(2));
+  const Eigen::Matrix2d IIf = Ff * iEf, IIg = Fg * iEg;
+  const Eigen::Matrix2d IIf_t = R * IIf * R;  // R is a reflection for facing normals: R⁻¹ = R.
+  Eigen::Matrix2d m1, m2;
+  if (!Inverse2(IIg + IIf_t + beta * IIg * IIf_t, &m1)) return false;
+  if (!Inverse2(IIg + IIf_t + beta * IIf_t * IIg, &m2)) return false;
+  // [−ω_y; ω_x] = W ω_xy with W = [0 −1; 1 0].
+  Eigen::Matrix2d W;
+  W << 0, -1, 1, 0;
+  Eigen::Matrix4d A;
+  A.block<2, 2>(0, 0) = iEf * R * m1 * IIg;
+  A.block<2, 2>(0, 2) = iEf * R * m1 * W;
+  A.block<2, 2>(2, 0) = -iEg * m2 * IIf_t;
+  A.block<2, 2>(2, 2) = iEg * m2 * (Eigen::Matrix2d::Identity() + beta * IIf_t) * W;
+  *u_q = A * RelativeVelocityMap(pose_f, pose_g, e.g.world.S, frame_g);
+  return true;
+}
+
+void PointAndDistanceJacobians(const SurfacePairEval& e, const BodyPose& pose_f,
+                               const BodyPose& pose_g, const Matrix4x14& u_q, Matrix3x14* f_q,
+                               Matrix3x14* g_q, Row14* beta_q) {
+  f_q->setZero();
+  g_q->setZero();
+  f_q->leftCols<7>() = PointJacobian(pose_f, e.f.body.S);
+  g_q->rightCols<7>() = PointJacobian(pose_g, e.g.body.S);
+  *f_q += e.f.world.S_u * u_q.row(0) + e.f.world.S_v * u_q.row(1);
+  *g_q += e.g.world.S_u * u_q.row(2) + e.g.world.S_v * u_q.row(3);
+  *beta_q = e.g.N.normalized().transpose() * (*f_q - *g_q);
+}
+
+bool CurveSurfaceJacobianImplicit(const CurveSurfaceEval& e, const BodyPose& pose_f,
+                                  const BodyPose& pose_g, Matrix3x14* u_q) {
+  u_q->setZero();
+  const nurbs::SurfacePoint& fb = e.f.body;
+  const nurbs::SurfacePoint& fw = e.f.world;
+  // F = [d·f_u, d·f_v, N_f·g'] with d = g − f.
+  Matrix3x14 d_q;
+  d_q << -PointJacobian(pose_f, fb.S), PointJacobian(pose_g, e.g.body.C);
+  Matrix3x14 fu_q = Matrix3x14::Zero(), fv_q = Matrix3x14::Zero(), N_q = Matrix3x14::Zero(),
+             g1_q = Matrix3x14::Zero();
+  fu_q.leftCols<7>() = DirectionJacobian(pose_f, fb.S_u);
+  fv_q.leftCols<7>() = DirectionJacobian(pose_f, fb.S_v);
+  N_q.leftCols<7>() = DirectionJacobian(pose_f, fb.S_u.cross(fb.S_v));
+  g1_q.rightCols<7>() = DirectionJacobian(pose_g, e.g.body.C1);
+  Matrix3x14 F_q;
+  F_q.row(0) = fw.S_u.transpose() * d_q + e.d.transpose() * fu_q;
+  F_q.row(1) = fw.S_v.transpose() * d_q + e.d.transpose() * fv_q;
+  F_q.row(2) = e.g.world.C1.transpose() * N_q + e.f.N.transpose() * g1_q;
+  const Eigen::FullPivLU<Eigen::Matrix3d> lu(e.F_u);
+  if (!(lu.rcond() > 1e-12)) return false;
+  *u_q = -lu.solve(F_q);
+  return true;
+}
+
+bool CurveSurfaceJacobianClosedForm(const CurveSurfaceEval& e, const BodyPose& pose_f,
+                                    const BodyPose& pose_g, Matrix3x14* u_q) {
+  u_q->setZero();
+  const Eigen::Matrix3d frame = internal::ContactFrame(e.f);
+  Eigen::Matrix2d Ef, Ff;
+  FundamentalBlocks(e.f, frame, &Ef, &Ff);
+  const Eigen::Matrix<double, 2, 3> P = frame.leftCols<2>().transpose();
+  const double beta = e.d.dot(frame.col(2));
+  const Eigen::Vector3d& g1 = e.g.world.C1;
+  const double g1_len = g1.norm();
+  const Eigen::Vector2d T = P * g1 / g1_len;  // Unit tangent in f's tangent plane.
+  Eigen::Matrix3d M;
+  M.topLeftCorner<2, 2>() = Ef + beta * Ff;
+  M.topRightCorner<2, 1>() = -P * g1;
+  M.bottomLeftCorner<1, 2>() = T.transpose() * Ff;
+  M(2, 2) = frame.col(2).dot(e.g.world.C2) / g1_len;
+  const Eigen::FullPivLU<Eigen::Matrix3d> lu(M);
+  if (!(lu.rcond() > 1e-12)) return false;
+  // B: rows v_x, v_y and T_x ω_y − T_y ω_x of the relative motion at the curve point.
+  const Matrix4x14 vw = RelativeVelocityMap(pose_f, pose_g, e.g.world.C, frame);
+  Matrix3x14 B;
+  B.topRows<2>() = vw.topRows<2>();
+  B.row(2) = T.x() * vw.row(3) - T.y() * vw.row(2);
+  *u_q = lu.solve(B);
+  return true;
+}
+
+}  // namespace tangent::contact

@@ -1,0 +1,244 @@
+#include "contact/extremal.h"
+
+#include <Eigen/Eigenvalues>
+
+#include "contact/box_newton.h"
+
+namespace tangent::contact {
+
+const char* ToString(ExtremalStatus s) {
+  switch (s) {
+    case ExtremalStatus::kConverged: return "converged";
+    case ExtremalStatus::kAtBoundary: return "at_boundary";
+    case ExtremalStatus::kSingular: return "singular";
+    case ExtremalStatus::kNotConverged: return "not_converged";
+  }
+  return "?";
+}
+
+const char* ToString(ExtremumKind k) {
+  switch (k) {
+    case ExtremumKind::kMinimum: return "minimum";
+    case ExtremumKind::kSaddle: return "saddle";
+    case ExtremumKind::kMaximum: return "maximum";
+    case ExtremumKind::kDegenerate: return "degenerate";
+  }
+  return "?";
+}
+
+namespace internal {
+
+template <int N>
+ExtremumKind Classify(const Eigen::Matrix<double, N, N>& hess, const std::array<bool, N>& active) {
+  Eigen::Matrix<double, N, N> h = hess;
+  for (int i = 0; i < N; ++i) {
+    if (!active[static_cast<size_t>(i)]) continue;
+    h.row(i).setZero();
+    h.col(i).setZero();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(h, Eigen::EigenvaluesOnly);
+  const auto& ev = es.eigenvalues();
+  // Eigenvalues below 1e-9 of the largest are zero: rounding in a Hessian built from O(1)
+  // products leaves ~1e-15 relative; 1e-9 also absorbs the near-singularity of touching pairs.
+  const double tol = 1e-9 * ev.cwiseAbs().maxCoeff();
+  int pos = 0, neg = 0;
+  for (int i = 0; i < N; ++i) {
+    if (active[static_cast<size_t>(i)]) continue;
+    pos += ev[i] > tol;
+    neg += ev[i] < -tol;
+  }
+  if (pos > 0 && neg > 0) return ExtremumKind::kSaddle;
+  if (pos > 0) return ExtremumKind::kMinimum;
+  if (neg > 0) return ExtremumKind::kMaximum;
+  return ExtremumKind::kDegenerate;
+}
+
+template ExtremumKind Classify<2>(const Eigen::Matrix2d&, const std::array<bool, 2>&);
+template ExtremumKind Classify<3>(const Eigen::Matrix3d&, const std::array<bool, 3>&);
+template ExtremumKind Classify<4>(const Eigen::Matrix4d&, const std::array<bool, 4>&);
+
+}  // namespace internal
+
+void EvaluatePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                  const nurbs::NurbsSurface& g, const BodyPose& pose_g, const Eigen::Vector4d& u,
+                  nurbs::SpanHint* hint_f, nurbs::SpanHint* hint_g, SurfacePairEval* out) {
+  EvaluatePlaced(f, pose_f, u[0], u[1], hint_f, &out->f);
+  EvaluatePlaced(g, pose_g, u[2], u[3], hint_g, &out->g);
+  const nurbs::SurfacePoint& a = out->f.world;
+  const nurbs::SurfacePoint& b = out->g.world;
+  const Eigen::Vector3d& N = out->f.N;
+  const Eigen::Vector3d d = a.S - b.S;
+  out->d = d;
+  out->F << d.dot(b.S_u), d.dot(b.S_v), N.dot(b.S_u), N.dot(b.S_v);
+  Eigen::Matrix4d& J = out->F_u;
+  J << a.S_u.dot(b.S_u), a.S_v.dot(b.S_u), -b.S_u.dot(b.S_u) + d.dot(b.S_uu),
+      -b.S_v.dot(b.S_u) + d.dot(b.S_uv),  //
+      a.S_u.dot(b.S_v), a.S_v.dot(b.S_v), -b.S_u.dot(b.S_v) + d.dot(b.S_uv),
+      -b.S_v.dot(b.S_v) + d.dot(b.S_vv),  //
+      out->f.N_u.dot(b.S_u), out->f.N_v.dot(b.S_u), N.dot(b.S_uu), N.dot(b.S_uv),  //
+      out->f.N_u.dot(b.S_v), out->f.N_v.dot(b.S_v), N.dot(b.S_uv), N.dot(b.S_vv);
+  out->grad << d.dot(a.S_u), d.dot(a.S_v), -d.dot(b.S_u), -d.dot(b.S_v);
+  Eigen::Matrix4d& H = out->hess;
+  H(0, 0) = a.S_u.dot(a.S_u) + d.dot(a.S_uu);
+  H(0, 1) = a.S_u.dot(a.S_v) + d.dot(a.S_uv);
+  H(1, 1) = a.S_v.dot(a.S_v) + d.dot(a.S_vv);
+  H(0, 2) = -a.S_u.dot(b.S_u);
+  H(0, 3) = -a.S_u.dot(b.S_v);
+  H(1, 2) = -a.S_v.dot(b.S_u);
+  H(1, 3) = -a.S_v.dot(b.S_v);
+  H(2, 2) = b.S_u.dot(b.S_u) - d.dot(b.S_uu);
+  H(2, 3) = b.S_u.dot(b.S_v) - d.dot(b.S_uv);
+  H(3, 3) = b.S_v.dot(b.S_v) - d.dot(b.S_vv);
+  H.triangularView<Eigen::StrictlyLower>() = H.transpose();
+}
+
+namespace {
+
+template <int N>
+ExtremalStatus StatusOf(const internal::BoxNewtonResult<N>& r) {
+  if (!r.converged) return ExtremalStatus::kNotConverged;
+  if (std::any_of(r.active.begin(), r.active.end(), [](bool b) { return b; })) {
+    return ExtremalStatus::kAtBoundary;
+  }
+  return r.singular ? ExtremalStatus::kSingular : ExtremalStatus::kConverged;
+}
+
+template <int N>
+internal::BoxNewtonOptions<N> Convert(const ExtremalOptions& o) {
+  internal::BoxNewtonOptions<N> b;
+  b.max_iterations = o.max_iterations;
+  b.step_tolerance = o.step_tolerance;
+  b.singular_rcond = o.singular_rcond;
+  return b;
+}
+
+Eigen::Vector2d Lo(const nurbs::NurbsSurface& s) {
+  return {s.knots_u().domain_begin(), s.knots_v().domain_begin()};
+}
+Eigen::Vector2d Hi(const nurbs::NurbsSurface& s) {
+  return {s.knots_u().domain_end(), s.knots_v().domain_end()};
+}
+
+}  // namespace
+
+SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                                           const nurbs::NurbsSurface& g, const BodyPose& pose_g,
+                                           const Eigen::Vector4d& seed,
+                                           const ExtremalOptions& options) {
+  nurbs::SpanHint hf, hg;
+  SurfacePairEval e;
+  auto eval = [&](const Eigen::Vector4d& x, internal::NewtonSystem<4>* s) {
+    EvaluatePair(f, pose_f, g, pose_g, x, &hf, &hg, &e);
+    s->F = e.F;
+    s->J = e.F_u;
+    s->grad = e.grad;
+    s->hess = e.hess;
+  };
+  Eigen::Vector4d lo, hi;
+  lo << Lo(f), Lo(g);
+  hi << Hi(f), Hi(g);
+  const auto r = internal::BoxNewton<4>(eval, seed, lo, hi, Convert<4>(options));
+  EvaluatePair(f, pose_f, g, pose_g, r.x, &hf, &hg, &e);
+  SurfaceSurfaceExtremum out;
+  out.u = r.x;
+  out.p_f = e.f.world.S;
+  out.p_g = e.g.world.S;
+  out.n_g = e.g.N.normalized();
+  out.beta = e.d.dot(out.n_g);
+  out.alignment = e.f.N.normalized().dot(out.n_g);
+  out.status = StatusOf(r);
+  out.kind = internal::Classify<4>(e.hess, r.active);
+  out.at_bound = r.active;
+  out.iterations = r.iterations;
+  out.rcond = r.rcond;
+  return out;
+}
+
+PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::NurbsSurface& f,
+                                       const BodyPose& pose_f, const Eigen::Vector2d& seed,
+                                       const ExtremalOptions& options) {
+  nurbs::SpanHint hf;
+  PlacedSurfacePoint p;
+  auto eval = [&](const Eigen::Vector2d& x, internal::NewtonSystem<2>* s) {
+    EvaluatePlaced(f, pose_f, x[0], x[1], &hf, &p);
+    const nurbs::SurfacePoint& a = p.world;
+    const Eigen::Vector3d d = a.S - x_W;
+    s->grad << d.dot(a.S_u), d.dot(a.S_v);
+    s->hess << a.S_u.dot(a.S_u) + d.dot(a.S_uu), a.S_u.dot(a.S_v) + d.dot(a.S_uv),
+        a.S_u.dot(a.S_v) + d.dot(a.S_uv), a.S_v.dot(a.S_v) + d.dot(a.S_vv);
+    s->F = s->grad;  // Regular at d = 0 already: one system inside and on the boundary.
+    s->J = s->hess;
+  };
+  const auto r = internal::BoxNewton<2>(eval, seed, Lo(f), Hi(f), Convert<2>(options));
+  internal::NewtonSystem<2> s;
+  eval(r.x, &s);
+  PointSurfaceExtremum out;
+  out.u = r.x;
+  out.p_f = p.world.S;
+  out.distance = (x_W - p.world.S).dot(p.N.normalized());
+  out.status = StatusOf(r);
+  out.kind = internal::Classify<2>(s.hess, r.active);
+  out.at_bound = r.active;
+  out.iterations = r.iterations;
+  return out;
+}
+
+void EvaluateCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                          const BodyCurve& g, const BodyPose& pose_g, const Eigen::Vector3d& u,
+                          nurbs::SpanHint* hint_f, int* span_g, nurbs::SpanHint* hint_g,
+                          CurveSurfaceEval* out) {
+  EvaluatePlaced(f, pose_f, u[0], u[1], hint_f, &out->f);
+  EvaluatePlaced(g, pose_g, u[2], span_g, hint_g, &out->g);
+  const nurbs::SurfacePoint& a = out->f.world;
+  const nurbs::CurvePoint<3>& c = out->g.world;
+  const Eigen::Vector3d& N = out->f.N;
+  const Eigen::Vector3d d = c.C - a.S;
+  out->d = d;
+  out->F << d.dot(a.S_u), d.dot(a.S_v), N.dot(c.C1);
+  out->F_u << -a.S_u.dot(a.S_u) + d.dot(a.S_uu), -a.S_v.dot(a.S_u) + d.dot(a.S_uv),
+      c.C1.dot(a.S_u),  //
+      -a.S_u.dot(a.S_v) + d.dot(a.S_uv), -a.S_v.dot(a.S_v) + d.dot(a.S_vv), c.C1.dot(a.S_v),  //
+      out->f.N_u.dot(c.C1), out->f.N_v.dot(c.C1), N.dot(c.C2);
+  out->grad << -d.dot(a.S_u), -d.dot(a.S_v), d.dot(c.C1);
+  Eigen::Matrix3d& H = out->hess;
+  H(0, 0) = a.S_u.dot(a.S_u) - d.dot(a.S_uu);
+  H(0, 1) = a.S_u.dot(a.S_v) - d.dot(a.S_uv);
+  H(1, 1) = a.S_v.dot(a.S_v) - d.dot(a.S_vv);
+  H(0, 2) = -a.S_u.dot(c.C1);
+  H(1, 2) = -a.S_v.dot(c.C1);
+  H(2, 2) = c.C1.dot(c.C1) + d.dot(c.C2);
+  H.triangularView<Eigen::StrictlyLower>() = H.transpose();
+}
+
+CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                                       const BodyCurve& g, const BodyPose& pose_g,
+                                       const Eigen::Vector3d& seed,
+                                       const ExtremalOptions& options) {
+  nurbs::SpanHint hf, hg;
+  int span_g = 0;
+  CurveSurfaceEval e;
+  auto eval = [&](const Eigen::Vector3d& x, internal::NewtonSystem<3>* s) {
+    EvaluateCurveSurface(f, pose_f, g, pose_g, x, &hf, &span_g, &hg, &e);
+    s->F = e.F;
+    s->J = e.F_u;
+    s->grad = e.grad;
+    s->hess = e.hess;
+  };
+  Eigen::Vector3d lo, hi;
+  lo << Lo(f), g.domain_begin();
+  hi << Hi(f), g.domain_end();
+  const auto r = internal::BoxNewton<3>(eval, seed, lo, hi, Convert<3>(options));
+  EvaluateCurveSurface(f, pose_f, g, pose_g, r.x, &hf, &span_g, &hg, &e);
+  CurveSurfaceExtremum out;
+  out.u = r.x;
+  out.p_f = e.f.world.S;
+  out.p_g = e.g.world.C;
+  out.beta = e.d.dot(e.f.N.normalized());
+  out.status = StatusOf(r);
+  out.kind = internal::Classify<3>(e.hess, r.active);
+  out.at_bound = r.active;
+  out.iterations = r.iterations;
+  return out;
+}
+
+}  // namespace tangent::contact

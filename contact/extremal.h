@@ -1,0 +1,124 @@
+#pragma once
+
+#include <array>
+
+#include <Eigen/Core>
+
+#include "contact/placed.h"
+#include "nurbs/surface.h"
+
+namespace tangent::contact {
+
+/// How an extremal-distance solve ended.
+enum class ExtremalStatus {
+  kConverged,     ///< an interior extremum, to the step tolerance
+  kAtBoundary,    ///< the extremum wants to leave the domain: the extremum restricted to it
+  kSingular,      ///< converged, but the Newton matrix is singular there (focal point, or a
+                  ///< continuum of extremal pairs): the point is one of many / unstable
+  kNotConverged,  ///< iteration budget exhausted; the best point is returned
+};
+/// The extremum's type from the second-order conditions of ½|f − g|² on the free parameters.
+enum class ExtremumKind { kMinimum, kSaddle, kMaximum, kDegenerate };
+
+const char* ToString(ExtremalStatus s);
+const char* ToString(ExtremumKind k);
+
+struct ExtremalOptions {
+  int max_iterations = 40;
+  double step_tolerance = 1e-13;  ///< Newton step / domain width; ~500 ulp of a unit domain
+  double singular_rcond = 1e-12;  ///< reciprocal condition below which the matrix is singular
+};
+
+/// Everything about a surface pair at parameters u = (u, v, s, t) and poses, in the world:
+/// the contact-regular equations F(u) = [d·g_s, d·g_t, N_f·g_s, N_f·g_t] (d = f − g, N_f = f_u ×
+/// f_v) and their Jacobian, and the gradient/Hessian of ½|d|². At an extremum with d ≠ 0 the
+/// zeros of F are those of design.md §4.1's ∇½|d|² = [d·f_u, d·f_v, −d·g_s, −d·g_t]; unlike
+/// that gradient, F keeps a regular Jacobian when the surfaces touch (β = 0), where the
+/// gradient's Hessian degenerates to a rank-2 JᵀJ. See docs/contact.md.
+struct SurfacePairEval {
+  PlacedSurfacePoint f, g;
+  Eigen::Vector3d d;  ///< f − g, world
+  Eigen::Vector4d F;
+  Eigen::Matrix4d F_u;
+  Eigen::Vector4d grad;
+  Eigen::Matrix4d hess;
+};
+
+/// Evaluates the pair (allocation free).
+void EvaluatePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                  const nurbs::NurbsSurface& g, const BodyPose& pose_g, const Eigen::Vector4d& u,
+                  nurbs::SpanHint* hint_f, nurbs::SpanHint* hint_g, SurfacePairEval* out);
+
+/// An extremal pair of points of two surfaces.
+struct SurfaceSurfaceExtremum {
+  Eigen::Vector4d u;         ///< (u, v) on f, (s, t) on g, inside both domains
+  double beta = 0.0;         ///< signed distance d·n_g: > 0 apart, < 0 interpenetrating (m)
+  Eigen::Vector3d p_f, p_g;  ///< contact points, world (m)
+  Eigen::Vector3d n_g;       ///< unit outward normal of g at p_g, world
+  double alignment = 0.0;    ///< n_f·n_g: −1 for surfaces facing each other
+  ExtremalStatus status = ExtremalStatus::kNotConverged;
+  ExtremumKind kind = ExtremumKind::kDegenerate;
+  std::array<bool, 4> at_bound{};  ///< parameters held on their domain boundary
+  int iterations = 0;
+  double rcond = 0.0;        ///< of the final Newton matrix
+};
+
+/// Extremal distance between surface f on body F and surface g on body G from a seed (u,v,s,t)
+/// (clamped into the domains). Never returns parameters outside the domains. Allocation free.
+SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                                           const nurbs::NurbsSurface& g, const BodyPose& pose_g,
+                                           const Eigen::Vector4d& seed,
+                                           const ExtremalOptions& options = {});
+
+/// Extremal distance between a world point x and surface f on a body: d = f − x,
+/// equations [d·f_u, d·f_v] (regular at d = 0, where the Jacobian is the first fundamental form).
+struct PointSurfaceExtremum {
+  Eigen::Vector2d u;
+  double distance = 0.0;  ///< (x − f)·n_f: > 0 when x is on the outward side (m)
+  Eigen::Vector3d p_f;
+  ExtremalStatus status = ExtremalStatus::kNotConverged;
+  ExtremumKind kind = ExtremumKind::kDegenerate;
+  std::array<bool, 2> at_bound{};
+  int iterations = 0;
+};
+PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::NurbsSurface& f,
+                                       const BodyPose& pose_f, const Eigen::Vector2d& seed,
+                                       const ExtremalOptions& options = {});
+
+/// Curve g(τ) on body G against surface f on body F: unknowns (u, v, τ), d = g − f, equations
+/// [d·f_u, d·f_v, N_f·g'] (regular at contact, as for surface pairs).
+struct CurveSurfaceEval {
+  PlacedSurfacePoint f;
+  PlacedCurvePoint g;
+  Eigen::Vector3d d;  ///< g − f, world
+  Eigen::Vector3d F;
+  Eigen::Matrix3d F_u;
+  Eigen::Vector3d grad;
+  Eigen::Matrix3d hess;
+};
+void EvaluateCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                          const BodyCurve& g, const BodyPose& pose_g, const Eigen::Vector3d& u,
+                          nurbs::SpanHint* hint_f, int* span_g, nurbs::SpanHint* hint_g,
+                          CurveSurfaceEval* out);
+
+struct CurveSurfaceExtremum {
+  Eigen::Vector3d u;       ///< (u, v) on f, τ on the curve
+  double beta = 0.0;       ///< (g − f)·n_f: > 0 when the curve is outside f (m)
+  Eigen::Vector3d p_f, p_g;
+  ExtremalStatus status = ExtremalStatus::kNotConverged;
+  ExtremumKind kind = ExtremumKind::kDegenerate;
+  std::array<bool, 3> at_bound{};
+  int iterations = 0;
+};
+CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                                       const BodyCurve& g, const BodyPose& pose_g,
+                                       const Eigen::Vector3d& seed,
+                                       const ExtremalOptions& options = {});
+
+namespace internal {
+/// Kind from the eigenvalues of a Hessian restricted to the free parameters.
+template <int N>
+ExtremumKind Classify(const Eigen::Matrix<double, N, N>& hess, const std::array<bool, N>& active);
+}  // namespace internal
+
+}  // namespace tangent::contact

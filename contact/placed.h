@@ -1,0 +1,66 @@
+#pragma once
+
+#include <Eigen/Core>
+
+#include "contact/rigid.h"
+#include "nurbs/curve.h"
+#include "nurbs/surface.h"
+
+namespace tangent::contact {
+
+/// A pose with its rotation computed once: what every placed evaluation needs.
+struct BodyPose {
+  Vector7d q;           ///< [p_WB, Q_WB]
+  Eigen::Matrix3d R;    ///< R_WB = R(Q/|Q|)
+  Eigen::Matrix<double, 3, 4> omega_map;  ///< w_W = omega_map · Q̇ (exact for the normalized map)
+
+  static BodyPose FromCoordinates(const Vector7d& q);
+  /// World position of a body-fixed point: p_WB + R_WB p_BQ.
+  Eigen::Vector3d Point(const Eigen::Vector3d& p_B) const { return q.head<3>() + R * p_B; }
+};
+
+/// A surface point on a body: body-frame evaluation and its world image, S(u,v) and partials.
+struct PlacedSurfacePoint {
+  nurbs::SurfacePoint body;   ///< in the body frame B
+  nurbs::SurfacePoint world;  ///< in the world frame W (points moved, partials rotated)
+  Eigen::Vector3d N;          ///< S_u × S_v in W (unnormalized normal)
+  Eigen::Vector3d N_u, N_v;   ///< its partials, S_uu × S_v + S_u × S_uv and S_uv × S_v + S_u × S_vv
+};
+
+/// Evaluates a body's surface at (u, v) to second order (fast path, allocation free).
+void EvaluatePlaced(const nurbs::NurbsSurface& surface, const BodyPose& pose, double u, double v,
+                    nurbs::SpanHint* hint, PlacedSurfacePoint* out);
+
+/// A curve fixed on a body: either a space curve in the body frame, or a curve c(τ) in the
+/// parameter domain of one of the body's surfaces (a trimming loop), g(τ) = S(c(τ)).
+class BodyCurve {
+ public:
+  explicit BodyCurve(const nurbs::NurbsCurve3d* space_curve) : space_(space_curve) {}
+  BodyCurve(const nurbs::NurbsSurface* surface, const nurbs::NurbsCurve2d* domain_curve)
+      : surface_(surface), domain_(domain_curve) {}
+  double domain_begin() const;
+  double domain_end() const;
+  /// g, g', g'' in the body frame at τ (chain rule for a curve on a surface).
+  nurbs::CurvePoint<3> Evaluate(double tau, int* span_hint, nurbs::SpanHint* surface_hint) const;
+
+ private:
+  const nurbs::NurbsCurve3d* space_ = nullptr;
+  const nurbs::NurbsSurface* surface_ = nullptr;
+  const nurbs::NurbsCurve2d* domain_ = nullptr;
+};
+
+/// A curve point on a body, body and world.
+struct PlacedCurvePoint {
+  nurbs::CurvePoint<3> body;
+  nurbs::CurvePoint<3> world;
+};
+
+void EvaluatePlaced(const BodyCurve& curve, const BodyPose& pose, double tau, int* span_hint,
+                    nurbs::SpanHint* surface_hint, PlacedCurvePoint* out);
+
+/// ∂x_W/∂q_B (3 x 7) of a body-fixed point with body coordinates p_B: [I, ∂(R p_B)/∂Q].
+Matrix37d PointJacobian(const BodyPose& pose, const Eigen::Vector3d& p_B);
+/// ∂a_W/∂q_B (3 x 7) of a body-fixed direction a_B (a partial, a normal): [0, ∂(R a_B)/∂Q].
+Matrix37d DirectionJacobian(const BodyPose& pose, const Eigen::Vector3d& a_B);
+
+}  // namespace tangent::contact
