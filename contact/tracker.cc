@@ -1,0 +1,115 @@
+#include "contact/tracker.h"
+
+#include <Eigen/LU>
+
+#include "contact/box_newton.h"
+
+namespace tangent::contact {
+
+const char* ToString(TrackStatus s) {
+  switch (s) {
+    case TrackStatus::kTracked: return "tracked";
+    case TrackStatus::kAtBoundary: return "at_boundary";
+    case TrackStatus::kSingular: return "singular";
+    case TrackStatus::kLost: return "lost";
+  }
+  return "?";
+}
+
+ContactTracker::ContactTracker(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
+                               const TrackerOptions& options)
+    : f_(f), g_(g), options_(options) {
+  lo_ << f.knots_u().domain_begin(), f.knots_v().domain_begin(), g.knots_u().domain_begin(),
+      g.knots_v().domain_begin();
+  hi_ << f.knots_u().domain_end(), f.knots_v().domain_end(), g.knots_u().domain_end(),
+      g.knots_v().domain_end();
+}
+
+TrackStatus ContactTracker::Reset(const Vector7d& q_f, const Vector7d& q_g,
+                                  const Eigen::Vector4d& u) {
+  u_ = u.cwiseMax(lo_).cwiseMin(hi_);
+  u_q_.setZero();
+  return Evaluate(q_f, q_g, /*correct=*/false);
+}
+
+TrackStatus ContactTracker::Step(const Vector7d& q_f, const Vector7d& q_g) {
+  // Predictor: first-order motion of the extremal point with the bodies.
+  Eigen::Matrix<double, 14, 1> dq;
+  dq << q_f - q_f_, q_g - q_g_;
+  u_ += u_q_ * dq;
+  return Evaluate(q_f, q_g, /*correct=*/true);
+}
+
+TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, bool correct) {
+  q_f_ = q_f;
+  q_g_ = q_g;
+  bool clamped = false;
+  for (int i = 0; i < 4; ++i) {
+    if (u_[i] < lo_[i] || u_[i] > hi_[i]) clamped = true;
+  }
+  u_ = u_.cwiseMax(lo_).cwiseMin(hi_);
+  const BodyPose pf = BodyPose::FromCoordinates(q_f);
+  const BodyPose pg = BodyPose::FromCoordinates(q_g);
+  EvaluatePair(f_, pf, g_, pg, u_, &hint_f_, &hint_g_, &eval_);
+  const Eigen::PartialPivLU<Eigen::Matrix4d> lu(eval_.F_u);
+  const Eigen::Vector3d n_g = eval_.g.N.normalized();
+  beta_ = eval_.d.dot(n_g);
+  // Scaled residual: lengths over the pair's size scale, normal components as angles.
+  const double len_g = std::max(eval_.g.world.S_u.norm(), eval_.g.world.S_v.norm());
+  const double scale = len_g * std::max(std::abs(beta_), 1e-3 * len_g);
+  residual_ = std::max({std::abs(eval_.F[0]) / scale, std::abs(eval_.F[1]) / scale,
+                        std::abs(eval_.F[2]) / (eval_.f.N.norm() * len_g),
+                        std::abs(eval_.F[3]) / (eval_.f.N.norm() * len_g)});
+  // 1e-13: ~500 ulp of the determinant of a 4x4 with O(1)-scaled entries; below it the matrix
+  // is singular for practical purposes (focal point, continuum of extremal pairs).
+  const double det_scale = eval_.F_u.cwiseAbs().rowwise().maxCoeff().prod();
+  if (!(std::abs(lu.determinant()) > 1e-13 * det_scale)) {
+    status_ = TrackStatus::kSingular;
+    return status_;
+  }
+  if (correct) {
+    Eigen::Vector4d delta = lu.solve(-eval_.F);
+    // A parameter on its domain edge whose correction points outward stays on the edge: the
+    // extremum restricted to the boundary is then corrected with the gradient of ½|d|² on the
+    // free parameters (as SolveSurfaceSurface does).
+    std::array<bool, 4> active{};
+    bool any = false;
+    for (int i = 0; i < 4; ++i) {
+      active[static_cast<size_t>(i)] =
+          (u_[i] <= lo_[i] && delta[i] < 0) || (u_[i] >= hi_[i] && delta[i] > 0);
+      any = any || active[static_cast<size_t>(i)];
+    }
+    if (any) {
+      internal::NewtonSystem<4> sys;
+      sys.F = eval_.F;
+      sys.J = eval_.F_u;
+      sys.grad = eval_.grad;
+      sys.hess = eval_.hess;
+      Eigen::Vector4d r;
+      Eigen::Matrix4d a;
+      internal::ActiveSystem<4>(sys, active, true, &r, &a);
+      double rcond = 0.0;
+      delta = internal::NewtonStep<4>(r, a, 1e-12, &rcond);
+      clamped = true;
+    }
+    if (!delta.allFinite() ||
+        delta.cwiseQuotient(hi_ - lo_).cwiseAbs().maxCoeff() > options_.max_correction ||
+        (!any && residual_ > options_.max_residual)) {
+      status_ = TrackStatus::kLost;
+      return status_;
+    }
+    // β at the corrected point to first order: ∂β/∂u = n_g·[f_u f_v −g_s −g_t].
+    beta_ += n_g.dot(eval_.f.world.S_u * delta[0] + eval_.f.world.S_v * delta[1] -
+                     eval_.g.world.S_u * delta[2] - eval_.g.world.S_v * delta[3]);
+    u_ += delta;
+    u_ = u_.cwiseMax(lo_).cwiseMin(hi_);
+  }
+  if (!ContactJacobianClosedForm(eval_, pf, pg, &u_q_)) {
+    status_ = TrackStatus::kSingular;
+    return status_;
+  }
+  status_ = clamped ? TrackStatus::kAtBoundary : TrackStatus::kTracked;
+  return status_;
+}
+
+}  // namespace tangent::contact

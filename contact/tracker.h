@@ -1,0 +1,70 @@
+#pragma once
+
+#include <Eigen/Core>
+
+#include "contact/contact_jacobian.h"
+#include "contact/extremal.h"
+
+namespace tangent::contact {
+
+/// Outcome of one tracking step. Inside the servo loop nothing throws: a failure is a state.
+enum class TrackStatus {
+  kTracked,     ///< predicted and corrected; residual small
+  kAtBoundary,  ///< the extremum reached a domain edge: parameters clamped there
+  kSingular,    ///< ∂F/∂u singular at the point (focal point, continuum): u_q not updated
+  kLost,        ///< the corrector did not contract; the contact must be re-found globally
+};
+const char* ToString(TrackStatus s);
+
+struct TrackerOptions {
+  /// Lost when the corrector step exceeds this fraction of a domain width (the predictor
+  /// should land within Newton's quadratic basin; a larger jump means a different extremum).
+  double max_correction = 0.05;
+  /// Lost when the contact equations' scaled residual at the predicted point exceeds this
+  /// (|d·x_g|, |d·y_g| over the pair's length scale, and |n_f·x_g|, |n_f·y_g| in radians):
+  /// one Newton step from a residual r leaves about r², so 1e-3 still corrects to ~1e-6 and
+  /// the next step's prediction finishes the job.
+  double max_residual = 1e-3;
+};
+
+/// Follows one extremal pair of two surfaces as the bodies move (seed 001 §3.3, design.md §2
+/// step 2): predictor u += u_q Δq, one Newton corrector on the contact equations, and the
+/// closed-form u_q refreshed from the same evaluation. Holds references to the surfaces (which
+/// must outlive it) and fixed-size state only: Step() allocates nothing and never throws.
+class ContactTracker {
+ public:
+  ContactTracker(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
+                 const TrackerOptions& options = {});
+
+  /// Starts from an extremum u (from SolveSurfaceSurface) at poses q_f, q_g.
+  TrackStatus Reset(const Vector7d& q_f, const Vector7d& q_g, const Eigen::Vector4d& u);
+  /// One servo step to new poses.
+  TrackStatus Step(const Vector7d& q_f, const Vector7d& q_g);
+
+  const Eigen::Vector4d& u() const { return u_; }
+  /// u_q at the last evaluated point (the predicted point of the last step): first-order
+  /// accurate at u(), which is what the next prediction needs.
+  const Matrix4x14& u_q() const { return u_q_; }
+  /// Signed distance at the last evaluated point, corrected to first order: β + β_u δ.
+  double beta() const { return beta_; }
+  double residual() const { return residual_; }
+  TrackStatus status() const { return status_; }
+
+ private:
+  TrackStatus Evaluate(const Vector7d& q_f, const Vector7d& q_g, bool correct);
+
+  const nurbs::NurbsSurface& f_;
+  const nurbs::NurbsSurface& g_;
+  TrackerOptions options_;
+  Eigen::Vector4d lo_, hi_;
+  Vector7d q_f_, q_g_;
+  Eigen::Vector4d u_ = Eigen::Vector4d::Zero();
+  Matrix4x14 u_q_ = Matrix4x14::Zero();
+  nurbs::SpanHint hint_f_, hint_g_;
+  SurfacePairEval eval_;
+  double beta_ = 0.0;
+  double residual_ = 0.0;
+  TrackStatus status_ = TrackStatus::kLost;
+};
+
+}  // namespace tangent::contact
