@@ -5,6 +5,7 @@
 // allocates nothing.
 
 #include <Eigen/Core>
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
 #include <array>
@@ -20,7 +21,38 @@ struct NewtonSystem {
   Eigen::Matrix<double, N, N> J;
   Eigen::Matrix<double, N, 1> grad;
   Eigen::Matrix<double, N, N> hess;
+  /// Natural size of the Newton matrix's entries (e.g. |S_u|² for a point problem), or 0. A
+  /// matrix whose entries are all below kSingularRcond · scale is singular even when it is
+  /// well conditioned relative to itself (a focal point shrinks a Hessian isotropically).
+  double scale = 0.0;
 };
+
+/// Reciprocal condition below which a Newton or Jacobian matrix counts as singular: u_q solved
+/// from it would carry a relative error of ~eps/rcond ≈ 1e-6, the accuracy the optimizer's
+/// constraint Jacobians are held to, and Newton's convergence is no longer quadratic.
+inline constexpr double kSingularRcond = 1e-10;
+
+/// Whether a square matrix is singular by that measure. Eigen's FullPivLU::rcond() alone is not
+/// enough: it estimates on the invertible part and returns 1 for a rank-deficient matrix.
+template <int N>
+bool IsSingular(const Eigen::FullPivLU<Eigen::Matrix<double, N, N>>& lu, double scale,
+                double* rcond) {
+  *rcond = lu.isInvertible() ? lu.rcond() : 0.0;
+  // With full pivoting the first pivot is the largest entry of the matrix (matrixLU() also holds
+  // L's O(1) multipliers, so its maximum would not do).
+  const double size = std::abs(lu.matrixLU()(0, 0));
+  return !(*rcond > kSingularRcond) || !std::isfinite(*rcond) ||
+         (scale > 0.0 && !(size > kSingularRcond * 1e4 * scale));
+}
+
+/// A FullPivLU whose rank decisions use kSingularRcond.
+template <int N>
+Eigen::FullPivLU<Eigen::Matrix<double, N, N>> Factor(const Eigen::Matrix<double, N, N>& a) {
+  Eigen::FullPivLU<Eigen::Matrix<double, N, N>> lu;
+  lu.setThreshold(kSingularRcond);
+  lu.compute(a);
+  return lu;
+}
 
 template <int N>
 struct BoxNewtonResult {
@@ -36,7 +68,6 @@ template <int N>
 struct BoxNewtonOptions {
   int max_iterations = 40;
   double step_tolerance = 1e-13;  ///< on each step component divided by its domain width
-  double singular_rcond = 1e-12;  ///< below: Levenberg–Marquardt step, reported singular
 };
 
 // The system in use: interior equations, or the gradient form with active rows pinned.
@@ -62,11 +93,11 @@ void ActiveSystem(const NewtonSystem<N>& s, const std::array<bool, N>& active, b
 // Newton step for a r + δ = 0 with a fallback to Levenberg–Marquardt when a is singular.
 template <int N>
 Eigen::Matrix<double, N, 1> NewtonStep(const Eigen::Matrix<double, N, 1>& r,
-                                       const Eigen::Matrix<double, N, N>& a, double singular_rcond,
-                                       double* rcond) {
-  const Eigen::FullPivLU<Eigen::Matrix<double, N, N>> lu(a);
-  *rcond = lu.rcond();
-  if (*rcond > singular_rcond && std::isfinite(*rcond)) return lu.solve(-r);
+                                       const Eigen::Matrix<double, N, N>& a, double scale,
+                                       bool* singular, double* rcond) {
+  const auto lu = Factor<N>(a);
+  *singular = IsSingular<N>(lu, scale, rcond);
+  if (!*singular) return lu.solve(-r);
   // Damped least squares: the step of smallest norm that reduces |r| along well-determined
   // directions; a continuum of solutions (concentric spheres) then stays put.
   const Eigen::Matrix<double, N, N> ata = a.transpose() * a;
@@ -93,8 +124,7 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
     Vec r;
     Mat a;
     ActiveSystem<N>(sys, res.active, any, &r, &a);
-    Vec step = NewtonStep<N>(r, a, opt.singular_rcond, &res.rcond);
-    res.singular = !(res.rcond > opt.singular_rcond);
+    Vec step = NewtonStep<N>(r, a, sys.scale, &res.singular, &res.rcond);
     if (!step.allFinite()) break;
     // Longest fraction of the step that stays in the box.
     double alpha = 1.0;
@@ -134,7 +164,8 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
     if (any && releases < 2 * N) {
       eval(res.x, &sys);
       double rc = 0.0;
-      const Vec free_step = NewtonStep<N>(sys.F, sys.J, opt.singular_rcond, &rc);
+      bool sing = false;
+      const Vec free_step = NewtonStep<N>(sys.F, sys.J, sys.scale, &sing, &rc);
       bool released = false;
       for (int i = 0; i < N; ++i) {
         if (!res.active[static_cast<size_t>(i)]) continue;

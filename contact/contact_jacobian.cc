@@ -2,6 +2,8 @@
 
 #include <Eigen/LU>
 
+#include "contact/box_newton.h"
+
 namespace tangent::contact {
 
 namespace internal {
@@ -25,13 +27,14 @@ Eigen::Vector3d UnitNormalDerivative(const Eigen::Vector3d& N, const Eigen::Vect
   return (N_x - n * n.dot(N_x)) / len;
 }
 
-// Inverse of a 2 x 2 matrix; false when its determinant is negligible against its entries.
-bool Inverse2(const Eigen::Matrix2d& m, Eigen::Matrix2d* inv) {
+// Inverse of a 2 x 2 matrix; false when it is singular by the same measure as the solver's:
+// |det| against scale², scale defaulting to the largest entry (then |det|/max|m_ij|² is within
+// a factor 2 of the reciprocal condition number). A matrix formed as a difference that cancels
+// passes the scale of the terms, so an isotropically small result counts as singular too.
+bool Inverse2(const Eigen::Matrix2d& m, Eigen::Matrix2d* inv, double scale = 0.0) {
   const double det = m.determinant();
-  // 1e-13 relative: a 2x2 determinant of entries O(s) is computed to ~1e-16 s²; below 1e-13 s²
-  // its inverse carries fewer than three correct digits.
-  const double scale = m.cwiseAbs().maxCoeff();
-  if (!(std::abs(det) > 1e-13 * scale * scale)) return false;
+  scale = std::max(scale, m.cwiseAbs().maxCoeff());
+  if (!(std::abs(det) > internal::kSingularRcond * scale * scale)) return false;
   *inv << m(1, 1), -m(0, 1), -m(1, 0), m(0, 0);
   *inv /= det;
   return true;
@@ -67,8 +70,9 @@ bool ContactJacobianImplicit(const SurfacePairEval& e, const BodyPose& pose_f,
   F_q.row(1) = gw.S_v.transpose() * d_q + e.d.transpose() * gt_q;
   F_q.row(2) = gw.S_u.transpose() * N_q + e.f.N.transpose() * gs_q;
   F_q.row(3) = gw.S_v.transpose() * N_q + e.f.N.transpose() * gt_q;
-  const Eigen::FullPivLU<Eigen::Matrix4d> lu(e.F_u);
-  if (!(lu.rcond() > 1e-12)) return false;
+  const auto lu = internal::Factor<4>(e.F_u);
+  double rcond = 0.0;
+  if (internal::IsSingular<4>(lu, 0.0, &rcond)) return false;
   *u_q = -lu.solve(F_q);
   return true;
 }
@@ -109,8 +113,12 @@ bool ContactJacobianClosedForm(const SurfacePairEval& e, const BodyPose& pose_f,
   Eigen::Matrix2d iM11, iH;
   if (!Inverse2(M11, &iM11)) return false;
   const Eigen::Matrix2d M21iM11 = M21 * iM11;
-  const Eigen::Matrix2d H = M22 - M21iM11 * M12;
-  if (!Inverse2(H, &iH)) return false;
+  const Eigen::Matrix2d schur_term = M21iM11 * M12;
+  const Eigen::Matrix2d H = M22 - schur_term;
+  // The Schur complement carries the pair's singularity (focal point, continuum), where its two
+  // terms cancel, possibly in both directions at once: judge it against their size.
+  const double h_scale = std::max(M22.cwiseAbs().maxCoeff(), schur_term.cwiseAbs().maxCoeff());
+  if (!Inverse2(H, &iH, h_scale)) return false;
   // Right-hand side map C: (v_x, v_y, ω_x, ω_y) ↦ [v_xy + β ω_(y,−x); σ ω_(y,−x)],
   // ω_(y,−x) = K ω_xy with K = [0 1; −1 0].
   Eigen::Matrix2d K;
@@ -185,8 +193,9 @@ bool CurveSurfaceJacobianImplicit(const CurveSurfaceEval& e, const BodyPose& pos
   F_q.row(0) = fw.S_u.transpose() * d_q + e.d.transpose() * fu_q;
   F_q.row(1) = fw.S_v.transpose() * d_q + e.d.transpose() * fv_q;
   F_q.row(2) = e.g.world.C1.transpose() * N_q + e.f.N.transpose() * g1_q;
-  const Eigen::FullPivLU<Eigen::Matrix3d> lu(e.F_u);
-  if (!(lu.rcond() > 1e-12)) return false;
+  const auto lu = internal::Factor<3>(e.F_u);
+  double rcond = 0.0;
+  if (internal::IsSingular<3>(lu, 0.0, &rcond)) return false;
   *u_q = -lu.solve(F_q);
   return true;
 }
@@ -207,8 +216,9 @@ bool CurveSurfaceJacobianClosedForm(const CurveSurfaceEval& e, const BodyPose& p
   M.topRightCorner<2, 1>() = -P * g1;
   M.bottomLeftCorner<1, 2>() = T.transpose() * Ff;
   M(2, 2) = frame.col(2).dot(e.g.world.C2) / g1_len;
-  const Eigen::FullPivLU<Eigen::Matrix3d> lu(M);
-  if (!(lu.rcond() > 1e-12)) return false;
+  const auto lu = internal::Factor<3>(M);
+  double rcond = 0.0;
+  if (internal::IsSingular<3>(lu, 0.0, &rcond)) return false;
   // B: rows v_x, v_y and T_x ω_y − T_y ω_x of the relative motion at the curve point.
   const Matrix4x14 vw = RelativeVelocityMap(pose_f, pose_g, e.g.world.C, frame);
   Matrix3x14 B;

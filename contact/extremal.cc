@@ -29,7 +29,8 @@ const char* ToString(ExtremumKind k) {
 namespace internal {
 
 template <int N>
-ExtremumKind Classify(const Eigen::Matrix<double, N, N>& hess, const std::array<bool, N>& active) {
+ExtremumKind Classify(const Eigen::Matrix<double, N, N>& hess, const std::array<bool, N>& active,
+                      double scale) {
   Eigen::Matrix<double, N, N> h = hess;
   for (int i = 0; i < N; ++i) {
     if (!active[static_cast<size_t>(i)]) continue;
@@ -38,9 +39,10 @@ ExtremumKind Classify(const Eigen::Matrix<double, N, N>& hess, const std::array<
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(h, Eigen::EigenvaluesOnly);
   const auto& ev = es.eigenvalues();
-  // Eigenvalues below 1e-9 of the largest are zero: rounding in a Hessian built from O(1)
-  // products leaves ~1e-15 relative; 1e-9 also absorbs the near-singularity of touching pairs.
-  const double tol = 1e-9 * ev.cwiseAbs().maxCoeff();
+  // Eigenvalues below 1e-6 of the natural scale are zero: near a focal point (where the
+  // Hessian vanishes) the iterate stops ~1e-8 away and its eigenvalues are that small; the
+  // same bar absorbs the rank-2 degeneracy of touching pairs.
+  const double tol = 1e-6 * std::max(scale, ev.cwiseAbs().maxCoeff());
   int pos = 0, neg = 0;
   for (int i = 0; i < N; ++i) {
     if (active[static_cast<size_t>(i)]) continue;
@@ -53,9 +55,9 @@ ExtremumKind Classify(const Eigen::Matrix<double, N, N>& hess, const std::array<
   return ExtremumKind::kDegenerate;
 }
 
-template ExtremumKind Classify<2>(const Eigen::Matrix2d&, const std::array<bool, 2>&);
-template ExtremumKind Classify<3>(const Eigen::Matrix3d&, const std::array<bool, 3>&);
-template ExtremumKind Classify<4>(const Eigen::Matrix4d&, const std::array<bool, 4>&);
+template ExtremumKind Classify<2>(const Eigen::Matrix2d&, const std::array<bool, 2>&, double);
+template ExtremumKind Classify<3>(const Eigen::Matrix3d&, const std::array<bool, 3>&, double);
+template ExtremumKind Classify<4>(const Eigen::Matrix4d&, const std::array<bool, 4>&, double);
 
 }  // namespace internal
 
@@ -96,11 +98,18 @@ namespace {
 
 template <int N>
 ExtremalStatus StatusOf(const internal::BoxNewtonResult<N>& r) {
+  // A singular matrix at the end explains a budget run out (Newton is only linear there), so it
+  // takes precedence over "not converged".
+  if (r.singular) return ExtremalStatus::kSingular;
   if (!r.converged) return ExtremalStatus::kNotConverged;
   if (std::any_of(r.active.begin(), r.active.end(), [](bool b) { return b; })) {
     return ExtremalStatus::kAtBoundary;
   }
-  return r.singular ? ExtremalStatus::kSingular : ExtremalStatus::kConverged;
+  return ExtremalStatus::kConverged;
+}
+
+double FirstFormScale(const nurbs::SurfacePoint& p) {
+  return std::max(p.S_u.squaredNorm(), p.S_v.squaredNorm());
 }
 
 template <int N>
@@ -108,7 +117,6 @@ internal::BoxNewtonOptions<N> Convert(const ExtremalOptions& o) {
   internal::BoxNewtonOptions<N> b;
   b.max_iterations = o.max_iterations;
   b.step_tolerance = o.step_tolerance;
-  b.singular_rcond = o.singular_rcond;
   return b;
 }
 
@@ -147,7 +155,8 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   out.beta = e.d.dot(out.n_g);
   out.alignment = e.f.N.normalized().dot(out.n_g);
   out.status = StatusOf(r);
-  out.kind = internal::Classify<4>(e.hess, r.active);
+  out.kind = internal::Classify<4>(
+      e.hess, r.active, std::max(FirstFormScale(e.f.world), FirstFormScale(e.g.world)));
   out.at_bound = r.active;
   out.iterations = r.iterations;
   out.rcond = r.rcond;
@@ -168,6 +177,7 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
         a.S_u.dot(a.S_v) + d.dot(a.S_uv), a.S_v.dot(a.S_v) + d.dot(a.S_vv);
     s->F = s->grad;  // Regular at d = 0 already: one system inside and on the boundary.
     s->J = s->hess;
+    s->scale = FirstFormScale(a);
   };
   const auto r = internal::BoxNewton<2>(eval, seed, Lo(f), Hi(f), Convert<2>(options));
   internal::NewtonSystem<2> s;
@@ -177,7 +187,7 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
   out.p_f = p.world.S;
   out.distance = (x_W - p.world.S).dot(p.N.normalized());
   out.status = StatusOf(r);
-  out.kind = internal::Classify<2>(s.hess, r.active);
+  out.kind = internal::Classify<2>(s.hess, r.active, s.scale);
   out.at_bound = r.active;
   out.iterations = r.iterations;
   return out;
@@ -235,7 +245,8 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
   out.p_g = e.g.world.C;
   out.beta = e.d.dot(e.f.N.normalized());
   out.status = StatusOf(r);
-  out.kind = internal::Classify<3>(e.hess, r.active);
+  out.kind = internal::Classify<3>(
+      e.hess, r.active, std::max(FirstFormScale(e.f.world), e.g.world.C1.squaredNorm()));
   out.at_bound = r.active;
   out.iterations = r.iterations;
   return out;

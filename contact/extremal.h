@@ -26,7 +26,6 @@ const char* ToString(ExtremumKind k);
 struct ExtremalOptions {
   int max_iterations = 40;
   double step_tolerance = 1e-13;  ///< Newton step / domain width; ~500 ulp of a unit domain
-  double singular_rcond = 1e-12;  ///< reciprocal condition below which the matrix is singular
 };
 
 /// Everything about a surface pair at parameters u = (u, v, s, t) and poses, in the world:
@@ -116,9 +115,11 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
                                        const ExtremalOptions& options = {});
 
 namespace internal {
-/// Kind from the eigenvalues of a Hessian restricted to the free parameters.
+/// Kind from the eigenvalues of a Hessian restricted to the free parameters; eigenvalues below
+/// 1e-6 of max(scale, largest eigenvalue) count as zero (scale: the first fundamental forms').
 template <int N>
-ExtremumKind Classify(const Eigen::Matrix<double, N, N>& hess, const std::array<bool, N>& active);
+ExtremumKind Classify(const Eigen::Matrix<double, N, N>& hess, const std::array<bool, N>& active,
+                      double scale);
 }  // namespace internal
 
 }  // namespace tangent::contact

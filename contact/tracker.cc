@@ -60,8 +60,8 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
   residual_ = std::max({std::abs(eval_.F[0]) / scale, std::abs(eval_.F[1]) / scale,
                         std::abs(eval_.F[2]) / (eval_.f.N.norm() * len_g),
                         std::abs(eval_.F[3]) / (eval_.f.N.norm() * len_g)});
-  // 1e-13: ~500 ulp of the determinant of a 4x4 with O(1)-scaled entries; below it the matrix
-  // is singular for practical purposes (focal point, continuum of extremal pairs).
+  // A cheap guard before solving (the determinant against the product of the row sizes, which
+  // bounds it); the closed form below applies the solver's kSingularRcond and refuses too.
   const double det_scale = eval_.F_u.cwiseAbs().rowwise().maxCoeff().prod();
   if (!(std::abs(lu.determinant()) > 1e-13 * det_scale)) {
     status_ = TrackStatus::kSingular;
@@ -89,7 +89,8 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
       Eigen::Matrix4d a;
       internal::ActiveSystem<4>(sys, active, true, &r, &a);
       double rcond = 0.0;
-      delta = internal::NewtonStep<4>(r, a, 1e-12, &rcond);
+      bool singular = false;
+      delta = internal::NewtonStep<4>(r, a, 0.0, &singular, &rcond);
       clamped = true;
     }
     if (!delta.allFinite() ||
