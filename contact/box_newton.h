@@ -32,26 +32,25 @@ struct NewtonSystem {
 /// constraint Jacobians are held to, and Newton's convergence is no longer quadratic.
 inline constexpr double kSingularRcond = 1e-10;
 
-/// Whether a square matrix is singular by that measure. Eigen's FullPivLU::rcond() alone is not
-/// enough: it estimates on the invertible part and returns 1 for a rank-deficient matrix.
+/// Whether a square matrix is singular by that measure, from its full-pivot LU: the ratio of the
+/// last pivot to the first estimates the reciprocal condition (cheaply, unlike Eigen's rcond(),
+/// which runs an iterative estimate and, on the invertible part only, returns 1 for a
+/// rank-deficient matrix). With full pivoting the first pivot is also the largest entry, which
+/// `scale` (the natural size of the entries, or 0) is checked against.
 template <int N>
 bool IsSingular(const Eigen::FullPivLU<Eigen::Matrix<double, N, N>>& lu, double scale,
                 double* rcond) {
-  *rcond = lu.isInvertible() ? lu.rcond() : 0.0;
-  // With full pivoting the first pivot is the largest entry of the matrix (matrixLU() also holds
-  // L's O(1) multipliers, so its maximum would not do).
-  const double size = std::abs(lu.matrixLU()(0, 0));
+  const double first = std::abs(lu.matrixLU()(0, 0));
+  const double last = std::abs(lu.matrixLU()(N - 1, N - 1));
+  *rcond = first > 0.0 ? last / first : 0.0;
   return !(*rcond > kSingularRcond) || !std::isfinite(*rcond) ||
-         (scale > 0.0 && !(size > kSingularRcond * 1e4 * scale));
+         (scale > 0.0 && !(first > kSingularRcond * 1e4 * scale));
 }
 
-/// A FullPivLU whose rank decisions use kSingularRcond.
+/// Full-pivot LU of a small matrix.
 template <int N>
 Eigen::FullPivLU<Eigen::Matrix<double, N, N>> Factor(const Eigen::Matrix<double, N, N>& a) {
-  Eigen::FullPivLU<Eigen::Matrix<double, N, N>> lu;
-  lu.setThreshold(kSingularRcond);
-  lu.compute(a);
-  return lu;
+  return Eigen::FullPivLU<Eigen::Matrix<double, N, N>>(a);
 }
 
 template <int N>
@@ -117,9 +116,9 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
   res.x = x0.cwiseMax(lo).cwiseMin(hi);
   const Vec width = (hi - lo).cwiseMax(1e-300);
   NewtonSystem<N> sys;
+  eval(res.x, &sys);
   int releases = 0;
   for (res.iterations = 0; res.iterations < opt.max_iterations; ++res.iterations) {
-    eval(res.x, &sys);
     const bool any = std::any_of(res.active.begin(), res.active.end(), [](bool b) { return b; });
     Vec r;
     Mat a;
@@ -147,6 +146,7 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
       a_try *= 0.5;
     }
     res.x = trial;
+    sys = tsys;  // The accepted trial's evaluation is the next iterate's.
     // Parameters that reached the boundary while the step pushed outward become active.
     bool hit = false;
     for (int i = 0; i < N; ++i) {
@@ -162,7 +162,6 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
     // Converged for the current active set. Release a boundary parameter when the interior
     // Newton step points back into the domain (the extremum is not on this boundary).
     if (any && releases < 2 * N) {
-      eval(res.x, &sys);
       double rc = 0.0;
       bool sing = false;
       const Vec free_step = NewtonStep<N>(sys.F, sys.J, sys.scale, &sing, &rc);

@@ -35,8 +35,8 @@ bool Inverse2(const Eigen::Matrix2d& m, Eigen::Matrix2d* inv, double scale = 0.0
   const double det = m.determinant();
   scale = std::max(scale, m.cwiseAbs().maxCoeff());
   if (!(std::abs(det) > internal::kSingularRcond * scale * scale)) return false;
-  *inv << m(1, 1), -m(0, 1), -m(1, 0), m(0, 0);
-  *inv /= det;
+  const double inv_det = 1.0 / det;  // One division, not four.
+  *inv << m(1, 1) * inv_det, -m(0, 1) * inv_det, -m(1, 0) * inv_det, m(0, 0) * inv_det;
   return true;
 }
 
@@ -94,31 +94,59 @@ Matrix4x14 RelativeVelocityMap(const BodyPose& pose_f, const BodyPose& pose_g,
   return b;
 }
 
+namespace {
+
+// One surface's contact-frame data for the closed form: frame axes (world) and the 2 x 2 blocks
+// E = [x y]ᵀ[S_u S_v] (upper triangular: x ∥ S_u) and F = [x y]ᵀ[n_u n_v] = [x y]ᵀ[N_u N_v]/|N|
+// (n_u = (N_u − n(n·N_u))/|N| and x, y ⟂ n).
+struct FrameBlocks {
+  Eigen::Vector3d x, y, z;
+  Eigen::Matrix2d E, F;
+};
+
+FrameBlocks MakeFrameBlocks(const PlacedSurfacePoint& p) {
+  FrameBlocks b;
+  const double su = p.world.S_u.norm();
+  const double inv_n = 1.0 / p.N.norm();
+  b.x = p.world.S_u / su;
+  b.z = p.N * inv_n;
+  b.y = b.z.cross(b.x);
+  b.E << su, b.x.dot(p.world.S_v), 0.0, b.y.dot(p.world.S_v);
+  b.F << b.x.dot(p.N_u) * inv_n, b.x.dot(p.N_v) * inv_n, b.y.dot(p.N_u) * inv_n,
+      b.y.dot(p.N_v) * inv_n;
+  return b;
+}
+
+}  // namespace
+
 bool ContactJacobianClosedForm(const SurfacePairEval& e, const BodyPose& pose_f,
                                const BodyPose& pose_g, Matrix4x14* u_q) {
-  u_q->setZero();
-  const Eigen::Matrix3d frame_f = internal::ContactFrame(e.f);
-  const Eigen::Matrix3d frame_g = internal::ContactFrame(e.g);
-  Eigen::Matrix2d Ef, Ff, Eg, Fg;
-  FundamentalBlocks(e.f, frame_f, &Ef, &Ff);
-  FundamentalBlocks(e.g, frame_g, &Eg, &Fg);
-  const Eigen::Matrix2d R = frame_g.leftCols<2>().transpose() * frame_f.leftCols<2>();
-  const double beta = e.d.dot(frame_g.col(2));
-  const double sigma = frame_f.col(2).dot(frame_g.col(2)) < 0 ? -1.0 : 1.0;
+  const FrameBlocks f = MakeFrameBlocks(e.f);
+  const FrameBlocks g = MakeFrameBlocks(e.g);
+  Eigen::Matrix2d R;  // Tangent-plane map from f's frame to g's.
+  R << g.x.dot(f.x), g.x.dot(f.y), g.y.dot(f.x), g.y.dot(f.y);
+  const double beta = e.d.dot(g.z);
+  const double sigma = f.z.dot(g.z) < 0 ? -1.0 : 1.0;
   // Blocks of M and the 2 x 2 elimination sequence (pivot on R_θ E_f, regular for any regular f).
-  const Eigen::Matrix2d M11 = R * Ef;
-  const Eigen::Matrix2d M12 = -(Eg + beta * Fg);
-  const Eigen::Matrix2d M21 = R * Ff;
-  const Eigen::Matrix2d M22 = -sigma * Fg;
+  const Eigen::Matrix2d M11 = R * f.E;
+  const Eigen::Matrix2d M12 = -(g.E + beta * g.F);
+  const Eigen::Matrix2d M21 = R * f.F;
+  const Eigen::Matrix2d M22 = -sigma * g.F;
   Eigen::Matrix2d iM11, iH;
-  if (!Inverse2(M11, &iM11)) return false;
+  if (!Inverse2(M11, &iM11)) {
+    u_q->setZero();
+    return false;
+  }
   const Eigen::Matrix2d M21iM11 = M21 * iM11;
   const Eigen::Matrix2d schur_term = M21iM11 * M12;
   const Eigen::Matrix2d H = M22 - schur_term;
   // The Schur complement carries the pair's singularity (focal point, continuum), where its two
   // terms cancel, possibly in both directions at once: judge it against their size.
   const double h_scale = std::max(M22.cwiseAbs().maxCoeff(), schur_term.cwiseAbs().maxCoeff());
-  if (!Inverse2(H, &iH, h_scale)) return false;
+  if (!Inverse2(H, &iH, h_scale)) {
+    u_q->setZero();
+    return false;
+  }
   // Right-hand side map C: (v_x, v_y, ω_x, ω_y) ↦ [v_xy + β ω_(y,−x); σ ω_(y,−x)],
   // ω_(y,−x) = K ω_xy with K = [0 1; −1 0].
   Eigen::Matrix2d K;
@@ -131,7 +159,27 @@ bool ContactJacobianClosedForm(const SurfacePairEval& e, const BodyPose& pose_f,
   const Eigen::Matrix<double, 2, 4> Ag = iH * (C2 - M21iM11 * C1);
   A.topRows<2>() = iM11 * (C1 - M12 * Ag);
   A.bottomRows<2>() = Ag;
-  *u_q = A * RelativeVelocityMap(pose_f, pose_g, e.g.world.S, frame_g);
+  // u_q = A B with B = RelativeVelocityMap(...), formed blockwise: with P = [x_g y_g]ᵀ,
+  // W = A_v P and Z = A_w P (A_v, A_w the velocity and rotation columns of A),
+  //   ∂u/∂p_F = −W,  ∂u/∂p_G = W,  ∂u/∂Q_F = (W[r_F]× − Z) Ω_F,  ∂u/∂Q_G = −(W[r_G]× − Z) Ω_G,
+  // r_B = p_g − p_B; row i of W[r]× is W_i × r.
+  Eigen::Matrix<double, 2, 3> P;
+  P.row(0) = g.x.transpose();
+  P.row(1) = g.y.transpose();
+  const Eigen::Matrix<double, 4, 3> W = A.leftCols<2>() * P;
+  const Eigen::Matrix<double, 4, 3> Z = A.rightCols<2>() * P;
+  const Eigen::Vector3d r_f = e.g.world.S - pose_f.q.head<3>();
+  const Eigen::Vector3d r_g = e.g.world.S - pose_g.q.head<3>();
+  Eigen::Matrix<double, 4, 3> Wf, Wg;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector3d w = W.row(i).transpose();
+    Wf.row(i) = w.cross(r_f).transpose();
+    Wg.row(i) = w.cross(r_g).transpose();
+  }
+  u_q->block<4, 3>(0, 0) = -W;
+  u_q->block<4, 4>(0, 3) = (Wf - Z) * pose_f.omega_map;
+  u_q->block<4, 3>(0, 7) = W;
+  u_q->block<4, 4>(0, 10) = -(Wg - Z) * pose_g.omega_map;
   return true;
 }
 

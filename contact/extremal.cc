@@ -1,6 +1,6 @@
 #include "contact/extremal.h"
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Cholesky>
 
 #include "contact/box_newton.h"
 
@@ -31,23 +31,24 @@ namespace internal {
 template <int N>
 ExtremumKind Classify(const Eigen::Matrix<double, N, N>& hess, const std::array<bool, N>& active,
                       double scale) {
+  // Inertia of the Hessian on the free parameters (Sylvester's law: the signs of D in a pivoted
+  // LDLᵀ are those of the eigenvalues; a few times cheaper than an eigen-decomposition). Pivots
+  // below 1e-6 of the natural scale count as zero: near a focal point (where the Hessian
+  // vanishes) the iterate stops ~1e-8 away and the pivots are that small; the same bar absorbs
+  // the rank-2 degeneracy of touching pairs.
   Eigen::Matrix<double, N, N> h = hess;
   for (int i = 0; i < N; ++i) {
     if (!active[static_cast<size_t>(i)]) continue;
     h.row(i).setZero();
     h.col(i).setZero();
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(h, Eigen::EigenvaluesOnly);
-  const auto& ev = es.eigenvalues();
-  // Eigenvalues below 1e-6 of the natural scale are zero: near a focal point (where the
-  // Hessian vanishes) the iterate stops ~1e-8 away and its eigenvalues are that small; the
-  // same bar absorbs the rank-2 degeneracy of touching pairs.
-  const double tol = 1e-6 * std::max(scale, ev.cwiseAbs().maxCoeff());
+  const Eigen::LDLT<Eigen::Matrix<double, N, N>> ldlt(h);
+  const auto d = ldlt.vectorD();
+  const double tol = 1e-6 * std::max(scale, d.cwiseAbs().maxCoeff());
   int pos = 0, neg = 0;
   for (int i = 0; i < N; ++i) {
-    if (active[static_cast<size_t>(i)]) continue;
-    pos += ev[i] > tol;
-    neg += ev[i] < -tol;
+    pos += d[i] > tol;
+    neg += d[i] < -tol;
   }
   if (pos > 0 && neg > 0) return ExtremumKind::kSaddle;
   if (pos > 0) return ExtremumKind::kMinimum;
@@ -63,7 +64,8 @@ template ExtremumKind Classify<4>(const Eigen::Matrix4d&, const std::array<bool,
 
 void EvaluatePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                   const nurbs::NurbsSurface& g, const BodyPose& pose_g, const Eigen::Vector4d& u,
-                  nurbs::SpanHint* hint_f, nurbs::SpanHint* hint_g, SurfacePairEval* out) {
+                  nurbs::SpanHint* hint_f, nurbs::SpanHint* hint_g, SurfacePairEval* out,
+                  bool gradient_form) {
   EvaluatePlaced(f, pose_f, u[0], u[1], hint_f, &out->f);
   EvaluatePlaced(g, pose_g, u[2], u[3], hint_g, &out->g);
   const nurbs::SurfacePoint& a = out->f.world;
@@ -79,6 +81,13 @@ void EvaluatePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
       -b.S_v.dot(b.S_v) + d.dot(b.S_vv),  //
       out->f.N_u.dot(b.S_u), out->f.N_v.dot(b.S_u), N.dot(b.S_uu), N.dot(b.S_uv),  //
       out->f.N_u.dot(b.S_v), out->f.N_v.dot(b.S_v), N.dot(b.S_uv), N.dot(b.S_vv);
+  if (gradient_form) FillGradientForm(out);
+}
+
+void FillGradientForm(SurfacePairEval* out) {
+  const nurbs::SurfacePoint& a = out->f.world;
+  const nurbs::SurfacePoint& b = out->g.world;
+  const Eigen::Vector3d& d = out->d;
   out->grad << d.dot(a.S_u), d.dot(a.S_v), -d.dot(b.S_u), -d.dot(b.S_v);
   Eigen::Matrix4d& H = out->hess;
   H(0, 0) = a.S_u.dot(a.S_u) + d.dot(a.S_uu);

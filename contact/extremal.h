@@ -43,10 +43,14 @@ struct SurfacePairEval {
   Eigen::Matrix4d hess;
 };
 
-/// Evaluates the pair (allocation free).
+/// Evaluates the pair (allocation free): the surfaces, F and F_u, and, when `gradient_form`
+/// (what boundary handling and classification need), grad and hess too.
 void EvaluatePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                   const nurbs::NurbsSurface& g, const BodyPose& pose_g, const Eigen::Vector4d& u,
-                  nurbs::SpanHint* hint_f, nurbs::SpanHint* hint_g, SurfacePairEval* out);
+                  nurbs::SpanHint* hint_f, nurbs::SpanHint* hint_g, SurfacePairEval* out,
+                  bool gradient_form = true);
+/// Fills e->grad and e->hess from the surface points already in *e.
+void FillGradientForm(SurfacePairEval* e);
 
 /// An extremal pair of points of two surfaces.
 struct SurfaceSurfaceExtremum {

@@ -5,11 +5,19 @@ namespace tangent::contact {
 BodyPose BodyPose::FromCoordinates(const Vector7d& q) {
   BodyPose pose;
   pose.q = q;
-  const Eigen::Vector4d Q = q.tail<4>();
-  pose.R = RotationMatrix(Q);
-  // Normalized map: w_W = R(Q̂) G(Q̂) Q̇ / |Q| (G(Q̂) Q̂ = 0, so the projector drops out).
-  const double norm = Q.norm();
-  pose.omega_map = pose.R * GBody(Q / norm) / norm;
+  // Written out (this runs twice per servo step): R of the unit quaternion (w, x, y, z) = Q/|Q|,
+  // and the normalized map w_W = R(Q̂) G(Q̂) Q̇/|Q| = 2 E(Q̂) Q̇/|Q| with the world-frame rate
+  // operator E(Q̂) = [−x w −z y; −y z w −x; −z −y x w] (G(Q̂) Q̂ = 0, so no projector is needed).
+  const double norm = q.tail<4>().norm();
+  const double inv = 1.0 / norm;
+  const double w = q[3] * inv, x = q[4] * inv, y = q[5] * inv, z = q[6] * inv;
+  pose.R << 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),  //
+      2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),        //
+      2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y);
+  const double s = 2.0 * inv;
+  pose.omega_map << -x * s, w * s, -z * s, y * s,  //
+      -y * s, z * s, w * s, -x * s,                //
+      -z * s, -y * s, x * s, w * s;
   return pose;
 }
 

@@ -1,6 +1,6 @@
 #include "contact/tracker.h"
 
-#include <Eigen/LU>
+#include <Eigen/LU>  // Matrix4d::computeInverseAndDetWithCheck
 
 #include "contact/box_newton.h"
 
@@ -50,25 +50,34 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
   u_ = u_.cwiseMax(lo_).cwiseMin(hi_);
   const BodyPose pf = BodyPose::FromCoordinates(q_f);
   const BodyPose pg = BodyPose::FromCoordinates(q_g);
-  EvaluatePair(f_, pf, g_, pg, u_, &hint_f_, &hint_g_, &eval_);
-  const Eigen::PartialPivLU<Eigen::Matrix4d> lu(eval_.F_u);
-  const Eigen::Vector3d n_g = eval_.g.N.normalized();
+  EvaluatePair(f_, pf, g_, pg, u_, &hint_f_, &hint_g_, &eval_, /*gradient_form=*/false);
+  // Eigen's fixed-size 4 x 4 inverse (cofactors, vectorized) gives the corrector and the
+  // determinant together, faster than an LU here; a matrix near singular is caught by the guard
+  // below and by the closed form's conditioning test, so cofactor rounding is never relied on
+  // where the matrix is ill conditioned.
+  Eigen::Matrix4d inverse;
+  double det = 0.0;
+  bool invertible = false;
+  eval_.F_u.computeInverseAndDetWithCheck(inverse, det, invertible, 0.0);
+  const double inv_N_g = 1.0 / eval_.g.N.norm();
+  const Eigen::Vector3d n_g = eval_.g.N * inv_N_g;
   beta_ = eval_.d.dot(n_g);
-  // Scaled residual: lengths over the pair's size scale, normal components as angles.
-  const double len_g = std::max(eval_.g.world.S_u.norm(), eval_.g.world.S_v.norm());
-  const double scale = len_g * std::max(std::abs(beta_), 1e-3 * len_g);
-  residual_ = std::max({std::abs(eval_.F[0]) / scale, std::abs(eval_.F[1]) / scale,
-                        std::abs(eval_.F[2]) / (eval_.f.N.norm() * len_g),
-                        std::abs(eval_.F[3]) / (eval_.f.N.norm() * len_g)});
+  // Scaled residual: d·x_g, d·y_g over the pair's length scale L·max(|β|, 1e-3 L) with
+  // L = max(|g_s|, |g_t|), and N_f·x_g, N_f·y_g over |N_f| L (angles in radians).
+  const double len_g = std::sqrt(std::max(eval_.g.world.S_u.squaredNorm(), eval_.g.world.S_v.squaredNorm()));
+  const double inv_len = 1.0 / (len_g * std::max(std::abs(beta_), 1e-3 * len_g));
+  const double inv_ang = 1.0 / (eval_.f.N.norm() * len_g);
+  residual_ = std::max(std::max(std::abs(eval_.F[0]), std::abs(eval_.F[1])) * inv_len,
+                       std::max(std::abs(eval_.F[2]), std::abs(eval_.F[3])) * inv_ang);
   // A cheap guard before solving (the determinant against the product of the row sizes, which
   // bounds it); the closed form below applies the solver's kSingularRcond and refuses too.
   const double det_scale = eval_.F_u.cwiseAbs().rowwise().maxCoeff().prod();
-  if (!(std::abs(lu.determinant()) > 1e-13 * det_scale)) {
+  if (!invertible || !(std::abs(det) > 1e-13 * det_scale)) {
     status_ = TrackStatus::kSingular;
     return status_;
   }
   if (correct) {
-    Eigen::Vector4d delta = lu.solve(-eval_.F);
+    Eigen::Vector4d delta = -(inverse * eval_.F);
     // A parameter on its domain edge whose correction points outward stays on the edge: the
     // extremum restricted to the boundary is then corrected with the gradient of ½|d|² on the
     // free parameters (as SolveSurfaceSurface does).
@@ -80,6 +89,7 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
       any = any || active[static_cast<size_t>(i)];
     }
     if (any) {
+      FillGradientForm(&eval_);
       internal::NewtonSystem<4> sys;
       sys.F = eval_.F;
       sys.J = eval_.F_u;
