@@ -35,8 +35,9 @@ struct Scene {
   nurbs::NurbsSurface g = nurbs::MakeShearedPatch(80 * std::numbers::pi / 180, 0.06, 0.01, true);
   Vector7d q_g = Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity());
   Vector7d QF(double gap, double t = 0.0) const {
-    const Eigen::Quaterniond rot(Eigen::AngleAxisd(0.3 + 0.05 * std::sin(t), Eigen::Vector3d::UnitZ()) *
-                                 Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX()));
+    const Eigen::Quaterniond rot(
+        Eigen::AngleAxisd(0.3 + 0.05 * std::sin(t), Eigen::Vector3d::UnitZ()) *
+        Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX()));
     return Coordinates({0.01 + 0.002 * std::sin(t), 0.03 + 0.002 * std::cos(t), 0.016 + gap}, rot);
   }
 };
@@ -48,7 +49,8 @@ const Scene& GetScene() {
 
 SurfaceSurfaceExtremum Solve(const Vector7d& qf, const Vector7d& qg, const Eigen::Vector4d& seed) {
   const Scene& s = GetScene();
-  return SolveSurfaceSurface(s.f, BodyPose::FromCoordinates(qf), s.g, BodyPose::FromCoordinates(qg), seed);
+  return SolveSurfaceSurface(s.f, BodyPose::FromCoordinates(qf), s.g, BodyPose::FromCoordinates(qg),
+                             seed);
 }
 
 // The extremum of a placement, found from the closest grid pair.
@@ -58,7 +60,8 @@ SurfaceSurfaceExtremum Reference(const Vector7d& qf) {
   return SolveSurfaceSurface(s.f, pf, s.g, pg, testing::ClosestGridPair(s.f, pf, s.g, pg, 40));
 }
 
-std::vector<Eigen::Vector4d> Seeds(const Eigen::Vector4d& u, double distance, int n, std::uint64_t seed) {
+std::vector<Eigen::Vector4d> Seeds(const Eigen::Vector4d& u, double distance, int n,
+                                   std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> g(0.0, 1.0);
   std::vector<Eigen::Vector4d> out;
@@ -129,7 +132,8 @@ void BM_Uq(benchmark::State& state) {
   EvaluatePair(s.f, pf, s.g, pg, ref.u, &hf, &hg, &e);
   Matrix4x14 uq;
   for (auto _ : state) {
-    const bool ok = kClosed ? ContactJacobianClosedForm(e, pf, pg, &uq) : ContactJacobianImplicit(e, pf, pg, &uq);
+    const bool ok = kClosed ? ContactJacobianClosedForm(e, pf, pg, &uq)
+                            : ContactJacobianImplicit(e, pf, pg, &uq);
     benchmark::DoNotOptimize(ok);
     benchmark::DoNotOptimize(uq);
   }
@@ -152,19 +156,22 @@ class Reporter : public benchmark::ConsoleReporter {
 
 void ConvergenceReport() {
   const Scene& s = GetScene();
-  std::printf("\nConvergence to the right extremum from seeds at increasing distance "
-              "(200 seeds each, parameter space):\n");
+  std::printf(
+      "\nConvergence to the right extremum from seeds at increasing distance "
+      "(200 seeds each, parameter space):\n");
   std::printf("%-17s %8s %14s %14s\n", "placement", "distance", "ours_newton", "occt_locate_ss");
   for (const double gap : {0.004, -0.012}) {  // β ≈ gap + 8 mm: +12 mm and −4 mm
     const Vector7d qf = s.QF(gap);
     const SurfaceSurfaceExtremum ref = Reference(qf);
-    const GeomAdaptor_Surface a(testing::ToOcctPlaced(s.f, qf)), b(testing::ToOcctPlaced(s.g, s.q_g));
+    const GeomAdaptor_Surface a(testing::ToOcctPlaced(s.f, qf)),
+        b(testing::ToOcctPlaced(s.g, s.q_g));
     for (const double dist : {0.01, 0.03, 0.1, 0.2, 0.3}) {
       int ours = 0, occt = 0;
       const auto seeds = Seeds(ref.u, dist, 200, 7);
       for (const Eigen::Vector4d& x : seeds) {
         const SurfaceSurfaceExtremum e = Solve(qf, s.q_g, x);
-        ours += e.status == ExtremalStatus::kConverged && (e.u - ref.u).cwiseAbs().maxCoeff() < 1e-8;
+        ours +=
+            e.status == ExtremalStatus::kConverged && (e.u - ref.u).cwiseAbs().maxCoeff() < 1e-8;
         Extrema_GenLocateExtSS ext(a, b, x[0], x[1], x[2], x[3], 1e-10, 1e-10);
         if (ext.IsDone()) {
           double u1, v1, u2, v2;
@@ -173,9 +180,8 @@ void ConvergenceReport() {
           occt += (Eigen::Vector4d(u1, v1, u2, v2) - ref.u).cwiseAbs().maxCoeff() < 1e-6;
         }
       }
-      std::printf("%-17s %8.2f %13.1f%% %13.1f%%\n",
-                  gap > 0 ? "separated" : "interpenetrating", dist, 100.0 * ours / seeds.size(),
-                  100.0 * occt / seeds.size());
+      std::printf("%-17s %8.2f %13.1f%% %13.1f%%\n", gap > 0 ? "separated" : "interpenetrating",
+                  dist, 100.0 * ours / seeds.size(), 100.0 * occt / seeds.size());
     }
     std::printf("  (reference extremum: beta = %.4f m, %s)\n", ref.beta, ToString(ref.kind));
   }
@@ -195,7 +201,10 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   Reporter r;
   benchmark::RunSpecifiedBenchmarks(&r);
-  auto t = [&](const char* n) { const auto it = r.times.find(n); return it == r.times.end() ? -1.0 : it->second; };
+  auto t = [&](const char* n) {
+    const auto it = r.times.find(n);
+    return it == r.times.end() ? -1.0 : it->second;
+  };
   const double track = t("ours_track/rational_bicubic/servo_1ms");
   const double occt = t("occt_locate_ss/rational_bicubic/seed_0.01");
   const double closed = t("ours_uq_closed/rational_bicubic");
@@ -203,13 +212,18 @@ int main(int argc, char** argv) {
   const double newton = t("ours_newton/rational_bicubic/seed_0.01");
   std::printf("\nTargets (medians, ns):\n");
   if (track > 0 && occt > 0) {
-    std::printf("  tracking step %.0f ns (target <= 300): %s; vs occt_locate_ss %.0f ns = 1/%.1f (target <= 1/7): %s\n",
-                track, track <= 300 ? "met" : "NOT MET", occt, occt / track, track * 7 <= occt ? "met" : "NOT MET");
+    std::printf(
+        "  tracking step %.0f ns (target <= 300): %s; vs occt_locate_ss %.0f ns = 1/%.1f (target "
+        "<= 1/7): %s\n",
+        track, track <= 300 ? "met" : "NOT MET", occt, occt / track,
+        track * 7 <= occt ? "met" : "NOT MET");
   }
-  if (newton > 0 && occt > 0) std::printf("  full Newton solve %.0f ns = 1/%.1f of occt_locate_ss\n", newton, occt / newton);
+  if (newton > 0 && occt > 0)
+    std::printf("  full Newton solve %.0f ns = 1/%.1f of occt_locate_ss\n", newton, occt / newton);
   if (closed > 0 && ift > 0) {
-    std::printf("  u_q closed form %.0f ns (target <= 150): %s; implicit form %.0f ns: closed %s\n", closed,
-                closed <= 150 ? "met" : "NOT MET", ift, closed <= ift ? "not slower (met)" : "SLOWER (not met)");
+    std::printf("  u_q closed form %.0f ns (target <= 150): %s; implicit form %.0f ns: closed %s\n",
+                closed, closed <= 150 ? "met" : "NOT MET", ift,
+                closed <= ift ? "not slower (met)" : "SLOWER (not met)");
   }
   ConvergenceReport();
   benchmark::Shutdown();

@@ -4,8 +4,8 @@
 // Internal header: templated on the problem size N (2, 3, 4), fixed-size Eigen only, so a call
 // allocates nothing.
 
-#include <Eigen/Core>
 #include <Eigen/Cholesky>
+#include <Eigen/Core>
 #include <Eigen/LU>
 #include <algorithm>
 #include <array>
@@ -128,8 +128,10 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
     // Longest fraction of the step that stays in the box.
     double alpha = 1.0;
     for (int i = 0; i < N; ++i) {
-      if (step[i] > 0 && res.x[i] + step[i] > hi[i]) alpha = std::min(alpha, (hi[i] - res.x[i]) / step[i]);
-      if (step[i] < 0 && res.x[i] + step[i] < lo[i]) alpha = std::min(alpha, (lo[i] - res.x[i]) / step[i]);
+      if (step[i] > 0 && res.x[i] + step[i] > hi[i])
+        alpha = std::min(alpha, (hi[i] - res.x[i]) / step[i]);
+      if (step[i] < 0 && res.x[i] + step[i] < lo[i])
+        alpha = std::min(alpha, (lo[i] - res.x[i]) / step[i]);
     }
     // Backtrack on the residual norm of the same system (the merit for saddles and maxima too).
     const double r0 = r.norm();
@@ -168,8 +170,8 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
       bool released = false;
       for (int i = 0; i < N; ++i) {
         if (!res.active[static_cast<size_t>(i)]) continue;
-        const bool inward = (res.x[i] <= lo[i] && free_step[i] > 0) ||
-                            (res.x[i] >= hi[i] && free_step[i] < 0);
+        const bool inward =
+            (res.x[i] <= lo[i] && free_step[i] > 0) || (res.x[i] >= hi[i] && free_step[i] < 0);
         if (inward) {
           res.active[static_cast<size_t>(i)] = false;
           released = true;

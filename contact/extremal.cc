@@ -8,20 +8,28 @@ namespace tangent::contact {
 
 const char* ToString(ExtremalStatus s) {
   switch (s) {
-    case ExtremalStatus::kConverged: return "converged";
-    case ExtremalStatus::kAtBoundary: return "at_boundary";
-    case ExtremalStatus::kSingular: return "singular";
-    case ExtremalStatus::kNotConverged: return "not_converged";
+    case ExtremalStatus::kConverged:
+      return "converged";
+    case ExtremalStatus::kAtBoundary:
+      return "at_boundary";
+    case ExtremalStatus::kSingular:
+      return "singular";
+    case ExtremalStatus::kNotConverged:
+      return "not_converged";
   }
   return "?";
 }
 
 const char* ToString(ExtremumKind k) {
   switch (k) {
-    case ExtremumKind::kMinimum: return "minimum";
-    case ExtremumKind::kSaddle: return "saddle";
-    case ExtremumKind::kMaximum: return "maximum";
-    case ExtremumKind::kDegenerate: return "degenerate";
+    case ExtremumKind::kMinimum:
+      return "minimum";
+    case ExtremumKind::kSaddle:
+      return "saddle";
+    case ExtremumKind::kMaximum:
+      return "maximum";
+    case ExtremumKind::kDegenerate:
+      return "degenerate";
   }
   return "?";
 }
@@ -78,7 +86,7 @@ void EvaluatePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
   J << a.S_u.dot(b.S_u), a.S_v.dot(b.S_u), -b.S_u.dot(b.S_u) + d.dot(b.S_uu),
       -b.S_v.dot(b.S_u) + d.dot(b.S_uv),  //
       a.S_u.dot(b.S_v), a.S_v.dot(b.S_v), -b.S_u.dot(b.S_v) + d.dot(b.S_uv),
-      -b.S_v.dot(b.S_v) + d.dot(b.S_vv),  //
+      -b.S_v.dot(b.S_v) + d.dot(b.S_vv),                                           //
       out->f.N_u.dot(b.S_u), out->f.N_v.dot(b.S_u), N.dot(b.S_uu), N.dot(b.S_uv),  //
       out->f.N_u.dot(b.S_v), out->f.N_v.dot(b.S_v), N.dot(b.S_uv), N.dot(b.S_vv);
   if (gradient_form) FillGradientForm(out);
@@ -164,8 +172,8 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   out.beta = e.d.dot(out.n_g);
   out.alignment = e.f.N.normalized().dot(out.n_g);
   out.status = StatusOf(r);
-  out.kind = internal::Classify<4>(
-      e.hess, r.active, std::max(FirstFormScale(e.f.world), FirstFormScale(e.g.world)));
+  out.kind = internal::Classify<4>(e.hess, r.active,
+                                   std::max(FirstFormScale(e.f.world), FirstFormScale(e.g.world)));
   out.at_bound = r.active;
   out.iterations = r.iterations;
   out.rcond = r.rcond;
@@ -202,10 +210,9 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
   return out;
 }
 
-void EvaluateCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
-                          const BodyCurve& g, const BodyPose& pose_g, const Eigen::Vector3d& u,
-                          nurbs::SpanHint* hint_f, int* span_g, nurbs::SpanHint* hint_g,
-                          CurveSurfaceEval* out) {
+void EvaluateCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f, const BodyCurve& g,
+                          const BodyPose& pose_g, const Eigen::Vector3d& u, nurbs::SpanHint* hint_f,
+                          int* span_g, nurbs::SpanHint* hint_g, CurveSurfaceEval* out) {
   EvaluatePlaced(f, pose_f, u[0], u[1], hint_f, &out->f);
   EvaluatePlaced(g, pose_g, u[2], span_g, hint_g, &out->g);
   const nurbs::SurfacePoint& a = out->f.world;
@@ -215,7 +222,7 @@ void EvaluateCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
   out->d = d;
   out->F << d.dot(a.S_u), d.dot(a.S_v), N.dot(c.C1);
   out->F_u << -a.S_u.dot(a.S_u) + d.dot(a.S_uu), -a.S_v.dot(a.S_u) + d.dot(a.S_uv),
-      c.C1.dot(a.S_u),  //
+      c.C1.dot(a.S_u),                                                                        //
       -a.S_u.dot(a.S_v) + d.dot(a.S_uv), -a.S_v.dot(a.S_v) + d.dot(a.S_vv), c.C1.dot(a.S_v),  //
       out->f.N_u.dot(c.C1), out->f.N_v.dot(c.C1), N.dot(c.C2);
   out->grad << -d.dot(a.S_u), -d.dot(a.S_v), d.dot(c.C1);
@@ -254,8 +261,8 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
   out.p_g = e.g.world.C;
   out.beta = e.d.dot(e.f.N.normalized());
   out.status = StatusOf(r);
-  out.kind = internal::Classify<3>(
-      e.hess, r.active, std::max(FirstFormScale(e.f.world), e.g.world.C1.squaredNorm()));
+  out.kind = internal::Classify<3>(e.hess, r.active,
+                                   std::max(FirstFormScale(e.f.world), e.g.world.C1.squaredNorm()));
   out.at_bound = r.active;
   out.iterations = r.iterations;
   return out;

@@ -63,7 +63,7 @@ struct SurfaceSurfaceExtremum {
   ExtremumKind kind = ExtremumKind::kDegenerate;
   std::array<bool, 4> at_bound{};  ///< parameters held on their domain boundary
   int iterations = 0;
-  double rcond = 0.0;        ///< of the final Newton matrix
+  double rcond = 0.0;  ///< of the final Newton matrix
 };
 
 /// Extremal distance between surface f on body F and surface g on body G from a seed (u,v,s,t)
@@ -99,14 +99,13 @@ struct CurveSurfaceEval {
   Eigen::Vector3d grad;
   Eigen::Matrix3d hess;
 };
-void EvaluateCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
-                          const BodyCurve& g, const BodyPose& pose_g, const Eigen::Vector3d& u,
-                          nurbs::SpanHint* hint_f, int* span_g, nurbs::SpanHint* hint_g,
-                          CurveSurfaceEval* out);
+void EvaluateCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f, const BodyCurve& g,
+                          const BodyPose& pose_g, const Eigen::Vector3d& u, nurbs::SpanHint* hint_f,
+                          int* span_g, nurbs::SpanHint* hint_g, CurveSurfaceEval* out);
 
 struct CurveSurfaceExtremum {
-  Eigen::Vector3d u;       ///< (u, v) on f, τ on the curve
-  double beta = 0.0;       ///< (g − f)·n_f: > 0 when the curve is outside f (m)
+  Eigen::Vector3d u;  ///< (u, v) on f, τ on the curve
+  double beta = 0.0;  ///< (g − f)·n_f: > 0 when the curve is outside f (m)
   Eigen::Vector3d p_f, p_g;
   ExtremalStatus status = ExtremalStatus::kNotConverged;
   ExtremumKind kind = ExtremumKind::kDegenerate;

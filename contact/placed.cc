@@ -45,7 +45,7 @@ double BodyCurve::domain_end() const {
 }
 
 nurbs::CurvePoint<3> BodyCurve::Evaluate(double tau, int* span_hint,
-                                          nurbs::SpanHint* surface_hint) const {
+                                         nurbs::SpanHint* surface_hint) const {
   nurbs::CurvePoint<3> out;
   if (space_) {
     space_->Evaluate(tau, 2, span_hint, &out);

@@ -10,8 +10,8 @@ namespace tangent::contact {
 
 /// A pose with its rotation computed once: what every placed evaluation needs.
 struct BodyPose {
-  Vector7d q;           ///< [p_WB, Q_WB]
-  Eigen::Matrix3d R;    ///< R_WB = R(Q/|Q|)
+  Vector7d q;                             ///< [p_WB, Q_WB]
+  Eigen::Matrix3d R;                      ///< R_WB = R(Q/|Q|)
   Eigen::Matrix<double, 3, 4> omega_map;  ///< w_W = omega_map · Q̇ (exact for the normalized map)
 
   static BodyPose FromCoordinates(const Vector7d& q);
@@ -24,7 +24,7 @@ struct PlacedSurfacePoint {
   nurbs::SurfacePoint body;   ///< in the body frame B
   nurbs::SurfacePoint world;  ///< in the world frame W (points moved, partials rotated)
   Eigen::Vector3d N;          ///< S_u × S_v in W (unnormalized normal)
-  Eigen::Vector3d N_u, N_v;   ///< its partials, S_uu × S_v + S_u × S_uv and S_uv × S_v + S_u × S_vv
+  Eigen::Vector3d N_u, N_v;  ///< its partials, S_uu × S_v + S_u × S_uv and S_uv × S_v + S_u × S_vv
 };
 
 /// Evaluates a body's surface at (u, v) to second order (fast path, allocation free).

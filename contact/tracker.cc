@@ -8,10 +8,14 @@ namespace tangent::contact {
 
 const char* ToString(TrackStatus s) {
   switch (s) {
-    case TrackStatus::kTracked: return "tracked";
-    case TrackStatus::kAtBoundary: return "at_boundary";
-    case TrackStatus::kSingular: return "singular";
-    case TrackStatus::kLost: return "lost";
+    case TrackStatus::kTracked:
+      return "tracked";
+    case TrackStatus::kAtBoundary:
+      return "at_boundary";
+    case TrackStatus::kSingular:
+      return "singular";
+    case TrackStatus::kLost:
+      return "lost";
   }
   return "?";
 }
@@ -64,7 +68,8 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
   beta_ = eval_.d.dot(n_g);
   // Scaled residual: d·x_g, d·y_g over the pair's length scale L·max(|β|, 1e-3 L) with
   // L = max(|g_s|, |g_t|), and N_f·x_g, N_f·y_g over |N_f| L (angles in radians).
-  const double len_g = std::sqrt(std::max(eval_.g.world.S_u.squaredNorm(), eval_.g.world.S_v.squaredNorm()));
+  const double len_g =
+      std::sqrt(std::max(eval_.g.world.S_u.squaredNorm(), eval_.g.world.S_v.squaredNorm()));
   const double inv_len = 1.0 / (len_g * std::max(std::abs(beta_), 1e-3 * len_g));
   const double inv_ang = 1.0 / (eval_.f.N.norm() * len_g);
   residual_ = std::max(std::max(std::abs(eval_.F[0]), std::abs(eval_.F[1])) * inv_len,

@@ -29,10 +29,12 @@ struct SpherePlane {
   nurbs::NurbsSurface sphere = MakeSphere(Eigen::Vector3d::Zero(), 0.05);
   nurbs::NurbsSurface plane = MakePlanePatch({-0.2, -0.2, 0}, {0.4, 0, 0}, {0, 0.4, 0});
   Vector7d Sphere(double height) const {
-    return Coordinates({0.01, -0.02, height},
-                       Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
+    return Coordinates({0.01, -0.02, height}, Eigen::Quaterniond(Eigen::AngleAxisd(
+                                                  std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
   }
-  Vector7d Plane() const { return Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()); }
+  Vector7d Plane() const {
+    return Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity());
+  }
 };
 
 TEST(ExtremalTest, SpherePlaneSeparatedTouchingAndPenetratingUnderManyPoses) {
@@ -56,7 +58,8 @@ TEST(ExtremalTest, SpherePlaneSeparatedTouchingAndPenetratingUnderManyPoses) {
       EXPECT_NEAR(e.alignment, -1.0, 1e-14);
       const Eigen::Vector3d expect_g = x * Eigen::Vector3d(0.01, -0.02, 0.0);
       EXPECT_LT((e.p_g - expect_g).norm(), kPosTol);
-      EXPECT_LT((e.p_f - (expect_g + x.linear() * Eigen::Vector3d(0, 0, height - 0.05))).norm(), kPosTol);
+      EXPECT_LT((e.p_f - (expect_g + x.linear() * Eigen::Vector3d(0, 0, height - 0.05))).norm(),
+                kPosTol);
       // Apart: a minimum of the distance; interpenetrating: the deepest point is a saddle of
       // ½|d|² (a maximum along the sphere, a minimum along the plane).
       if (height > 0.05) {
@@ -75,8 +78,12 @@ TEST(ExtremalTest, CrossedCylindersMatchSkewLineDistance) {
   const nurbs::NurbsSurface cyl = MakeCylinder(0.01, 0.2);
   for (double c : {0.05, 0.02, 0.015}) {
     // Cylinder axis is body z from 0 to 0.2; turn it to world x (F) and world y (G).
-    const Vector7d qf = Coordinates({-0.1, 0, 0}, Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitY())));
-    const Vector7d qg = Coordinates({0, -0.1, c}, Eigen::Quaterniond(Eigen::AngleAxisd(-std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
+    const Vector7d qf = Coordinates(
+        {-0.1, 0, 0},
+        Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitY())));
+    const Vector7d qg = Coordinates(
+        {0, -0.1, c},
+        Eigen::Quaterniond(Eigen::AngleAxisd(-std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
     const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(qg);
     const Eigen::Vector4d seed = testing::ClosestGridPair(cyl, pf, cyl, pg, 24);
     const SurfaceSurfaceExtremum e = SolveSurfaceSurface(cyl, pf, cyl, pg, seed);

@@ -48,15 +48,19 @@ TEST(HardCasesTest, FocalPoint) {
   EXPECT_EQ(focal.kind, ExtremumKind::kDegenerate);
   const double err = (focal.u - Eigen::Vector2d(0.5, 0.5)).norm();
   EXPECT_LT(err, 1e-4);
-  std::printf("focal point (point-surface): status %s, kind %s, |u - vertex| = %.1e, %d iterations\n",
-              ToString(focal.status), ToString(focal.kind), err, focal.iterations);
+  std::printf(
+      "focal point (point-surface): status %s, kind %s, |u - vertex| = %.1e, %d iterations\n",
+      ToString(focal.status), ToString(focal.kind), err, focal.iterations);
   // Surface pair: a 5 mm sphere centred at the focal point, i.e. its lowest point at a distance
   // equal to the vertex's radius of curvature less 5 mm: the pair's ∂F/∂u is singular; the
   // solver says so and both Jacobian forms refuse rather than return a huge u_q.
   const nurbs::NurbsSurface ball = nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.005);
-  const Vector7d q_ball = Coordinates({0, 0, 1.0 / k}, Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
+  const Vector7d q_ball = Coordinates(
+      {0, 0, 1.0 / k},
+      Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
   const BodyPose pb = BodyPose::FromCoordinates(q_ball);
-  const SurfaceSurfaceExtremum pair = SolveSurfaceSurface(ball, pb, par, pose, {0.74, 0.52, 0.52, 0.48});
+  const SurfaceSurfaceExtremum pair =
+      SolveSurfaceSurface(ball, pb, par, pose, {0.74, 0.52, 0.52, 0.48});
   EXPECT_EQ(pair.status, ExtremalStatus::kSingular);
   nurbs::SpanHint h1, h2;
   SurfacePairEval ev;
@@ -65,8 +69,9 @@ TEST(HardCasesTest, FocalPoint) {
   EXPECT_FALSE(ContactJacobianImplicit(ev, pb, pose, &uq));
   EXPECT_FALSE(ContactJacobianClosedForm(ev, pb, pose, &uq));
   EXPECT_TRUE(uq.allFinite());
-  std::printf("focal point (sphere-paraboloid): status %s, beta = %.6e (expected %.6e), rcond %.1e\n",
-              ToString(pair.status), pair.beta, 1.0 / k - 0.005, pair.rcond);
+  std::printf(
+      "focal point (sphere-paraboloid): status %s, beta = %.6e (expected %.6e), rcond %.1e\n",
+      ToString(pair.status), pair.beta, 1.0 / k - 0.005, pair.rcond);
   EXPECT_NEAR(pair.beta, 1.0 / k - 0.005, 1e-7);
 }
 
@@ -79,12 +84,21 @@ TEST(HardCasesTest, ContinuumOfExtremalPairs) {
     double beta;
   };
   const Case cases[] = {
-      {"concentric spheres", nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.03),
-       nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.05), {0.3, 0.45, 0.32, 0.47}, -0.02},
-      {"coaxial cylinders", nurbs::MakeCylinder(0.02, 0.1), nurbs::MakeCylinder(0.05, 0.1),
-       {0.3, 0.4, 0.31, 0.45}, -0.03},
-      {"plane on plane", nurbs::MakePlanePatch({0, 0, 0.01}, {0.1, 0, 0}, {0, -0.1, 0}),
-       nurbs::MakePlanePatch({0, -0.1, 0}, {0.1, 0, 0}, {0, 0.1, 0}), {0.3, 0.4, 0.35, 0.5}, 0.01},
+      {"concentric spheres",
+       nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.03),
+       nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.05),
+       {0.3, 0.45, 0.32, 0.47},
+       -0.02},
+      {"coaxial cylinders",
+       nurbs::MakeCylinder(0.02, 0.1),
+       nurbs::MakeCylinder(0.05, 0.1),
+       {0.3, 0.4, 0.31, 0.45},
+       -0.03},
+      {"plane on plane",
+       nurbs::MakePlanePatch({0, 0, 0.01}, {0.1, 0, 0}, {0, -0.1, 0}),
+       nurbs::MakePlanePatch({0, -0.1, 0}, {0.1, 0, 0}, {0, 0.1, 0}),
+       {0.3, 0.4, 0.35, 0.5},
+       0.01},
   };
   for (const Case& c : cases) {
     const SurfaceSurfaceExtremum e = SolveSurfaceSurface(c.f, id, c.g, id, c.seed);
@@ -103,10 +117,13 @@ TEST(HardCasesTest, PoleOfARevolvedSurface) {
   // The sphere's south pole (v = 0, where S_u = 0) resting above a plane: the extremum sits on
   // the domain edge v = 0 with a degenerate parameterization.
   const nurbs::NurbsSurface sphere = nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.05);
-  const nurbs::NurbsSurface plane = nurbs::MakePlanePatch({-0.2, -0.2, 0}, {0.4, 0, 0}, {0, 0.4, 0});
-  const BodyPose pf = BodyPose::FromCoordinates(Coordinates({0.01, 0.02, 0.06}, Eigen::Quaterniond::Identity()));
+  const nurbs::NurbsSurface plane =
+      nurbs::MakePlanePatch({-0.2, -0.2, 0}, {0.4, 0, 0}, {0, 0.4, 0});
+  const BodyPose pf =
+      BodyPose::FromCoordinates(Coordinates({0.01, 0.02, 0.06}, Eigen::Quaterniond::Identity()));
   const BodyPose pg = BodyPose::FromCoordinates(kIdentity);
-  const SurfaceSurfaceExtremum e = SolveSurfaceSurface(sphere, pf, plane, pg, {0.3, 0.03, 0.5, 0.5});
+  const SurfaceSurfaceExtremum e =
+      SolveSurfaceSurface(sphere, pf, plane, pg, {0.3, 0.03, 0.5, 0.5});
   // Defined behaviour: the contact point and distance are right to ~1e-7 m in 40 iterations
   // (Newton is only linear at the pole, where S_u = 0 and the contact equations lose rank), the
   // status is
@@ -129,11 +146,15 @@ TEST(HardCasesTest, PoleOfARevolvedSurface) {
 TEST(HardCasesTest, PartialsMeetingAtAFewDegrees) {
   // A patch sheared to 3°, face down over a torus: the closed form still matches finite
   // differences; print how well.
-  const nurbs::NurbsSurface sheared = nurbs::MakeShearedPatch(3 * std::numbers::pi / 180, 0.08, 0.01, false);
+  const nurbs::NurbsSurface sheared =
+      nurbs::MakeShearedPatch(3 * std::numbers::pi / 180, 0.08, 0.01, false);
   const nurbs::NurbsSurface torus = nurbs::MakeTorus(0.04, 0.01);
-  const Vector7d qf = Coordinates({-0.03, 0.0, 0.025}, Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX())));
+  const Vector7d qf = Coordinates(
+      {-0.03, 0.0, 0.025},
+      Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX())));
   const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(kIdentity);
-  const SurfaceSurfaceExtremum e = SolveSurfaceSurface(sheared, pf, torus, pg, testing::ClosestGridPair(sheared, pf, torus, pg, 60));
+  const SurfaceSurfaceExtremum e = SolveSurfaceSurface(
+      sheared, pf, torus, pg, testing::ClosestGridPair(sheared, pf, torus, pg, 60));
   ASSERT_EQ(e.status, ExtremalStatus::kConverged);
   nurbs::SpanHint h1, h2;
   SurfacePairEval ev;
@@ -147,7 +168,9 @@ TEST(HardCasesTest, PartialsMeetingAtAFewDegrees) {
     for (int s = 0; s < 2; ++s) {
       Vector7d a = qf, b = kIdentity;
       (i < 7 ? a[i] : b[i - 7]) += (s == 0 ? h : -h);
-      u[s] = SolveSurfaceSurface(sheared, BodyPose::FromCoordinates(a), torus, BodyPose::FromCoordinates(b), e.u).u;
+      u[s] = SolveSurfaceSurface(sheared, BodyPose::FromCoordinates(a), torus,
+                                 BodyPose::FromCoordinates(b), e.u)
+                 .u;
     }
     fd.col(i) = (u[0] - u[1]) / (2 * h);
   }
@@ -165,13 +188,15 @@ TEST(HardCasesTest, DeepInterpenetration) {
   // the sphere's lowest point against the plane point above it, β = −8 cm (deeper than the
   // radius), normals anti-parallel; a saddle of ½|d|².
   const nurbs::NurbsSurface sphere = nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.05);
-  const nurbs::NurbsSurface plane = nurbs::MakePlanePatch({-0.2, -0.2, 0}, {0.4, 0, 0}, {0, 0.4, 0});
+  const nurbs::NurbsSurface plane =
+      nurbs::MakePlanePatch({-0.2, -0.2, 0}, {0.4, 0, 0}, {0, 0.4, 0});
   const Eigen::Quaterniond turn(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()));
   const BodyPose pf = BodyPose::FromCoordinates(Coordinates({0, 0, -0.03}, turn));
   const BodyPose pg = BodyPose::FromCoordinates(kIdentity);
   int found = 0;
   for (double off : {0.0, 0.01, 0.02, 0.04}) {
-    const SurfaceSurfaceExtremum e = SolveSurfaceSurface(sphere, pf, plane, pg, {0.75 + off, 0.5 - off, 0.5 + off, 0.5 - off});
+    const SurfaceSurfaceExtremum e =
+        SolveSurfaceSurface(sphere, pf, plane, pg, {0.75 + off, 0.5 - off, 0.5 + off, 0.5 - off});
     if (e.status == ExtremalStatus::kConverged && std::abs(e.beta + 0.08) < 1e-12) ++found;
     if (off == 0.02) {
       EXPECT_EQ(e.status, ExtremalStatus::kConverged);
@@ -180,7 +205,9 @@ TEST(HardCasesTest, DeepInterpenetration) {
       EXPECT_EQ(e.kind, ExtremumKind::kSaddle);
     }
   }
-  std::printf("deep interpenetration: penetration extremum (beta = -8 cm) found from %d of 4 seeds\n", found);
+  std::printf(
+      "deep interpenetration: penetration extremum (beta = -8 cm) found from %d of 4 seeds\n",
+      found);
 }
 
 }  // namespace

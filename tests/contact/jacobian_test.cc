@@ -44,7 +44,8 @@ FdResult FiniteDifferences(const nurbs::NurbsSurface& f, const Vector7d& qf,
     for (int s = 0; s < 2; ++s) {
       Vector7d a = qf, b = qg;
       (i < 7 ? a[i] : b[i - 7]) += (s == 0 ? kH : -kH);
-      e[s] = SolveSurfaceSurface(f, BodyPose::FromCoordinates(a), g, BodyPose::FromCoordinates(b), u0);
+      e[s] =
+          SolveSurfaceSurface(f, BodyPose::FromCoordinates(a), g, BodyPose::FromCoordinates(b), u0);
       EXPECT_EQ(e[s].status, ExtremalStatus::kConverged) << "FD solve, coordinate " << i;
     }
     r.u_q.col(i) = (e[0].u - e[1].u) / (2 * kH);
@@ -72,11 +73,14 @@ void CheckCase(const Case& c, double penetration) {
   ASSERT_GT(e.beta, 0.0) << c.name << ": the case should start separated";
   Vector7d qg = c.qg;
   for (const double target : {e.beta, 0.0, -penetration}) {
-    const std::string label = c.name + (target > 0 ? " separated" : target == 0 ? " touching" : " interpenetrating");
+    const std::string label = c.name + (target > 0    ? " separated"
+                                        : target == 0 ? " touching"
+                                                      : " interpenetrating");
     // Move G along the normal to the target β, re-solve (twice: the shift is first order).
     for (int k = 0; k < 3 && target != e.beta; ++k) {
       qg = testing::ShiftToBeta(e, qg, target);
-      e = SolveSurfaceSurface(*c.f, BodyPose::FromCoordinates(c.qf), *c.g, BodyPose::FromCoordinates(qg), e.u);
+      e = SolveSurfaceSurface(*c.f, BodyPose::FromCoordinates(c.qf), *c.g,
+                              BodyPose::FromCoordinates(qg), e.u);
     }
     ASSERT_EQ(e.status, ExtremalStatus::kConverged) << label;
     if (target == 0.0) {
@@ -111,14 +115,20 @@ void CheckCase(const Case& c, double penetration) {
 
 TEST(JacobianTest, SpherePlaneOrthogonal) {
   const nurbs::NurbsSurface sphere = nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.05);
-  const nurbs::NurbsSurface plane = nurbs::MakePlanePatch({-0.2, -0.2, 0}, {0.4, 0, 0}, {0, 0.4, 0});
+  const nurbs::NurbsSurface plane =
+      nurbs::MakePlanePatch({-0.2, -0.2, 0}, {0.4, 0, 0}, {0, 0.4, 0});
   std::mt19937_64 rng(20);
   for (int pose = 0; pose < 3; ++pose) {
     Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
     x.linear() = testing::RandomRotation(rng).toRotationMatrix();
     x.translation() = Eigen::Vector3d::Random();
-    const Vector7d qf = testing::Transform(x, Coordinates({0.01, -0.02, 0.07}, Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()))));
-    const Vector7d qg = testing::Transform(x, Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
+    const Vector7d qf = testing::Transform(
+        x, Coordinates({0.01, -0.02, 0.07},
+                       Eigen::Quaterniond(
+                           Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()) *
+                           Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()))));
+    const Vector7d qg =
+        testing::Transform(x, Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
     const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(qg);
     CheckCase({"sphere-plane pose " + std::to_string(pose), &sphere, &plane, qf, qg,
                testing::ClosestGridPair(sphere, pf, plane, pg, 30), true},
@@ -128,16 +138,24 @@ TEST(JacobianTest, SpherePlaneOrthogonal) {
 
 TEST(JacobianTest, CrossedCylindersOrthogonal) {
   const nurbs::NurbsSurface cyl = nurbs::MakeCylinder(0.01, 0.2);
-  const Vector7d qf = Coordinates({-0.1, 0, 0}, Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitY())));
+  const Vector7d qf = Coordinates(
+      {-0.1, 0, 0},
+      Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitY())));
   // Not quite crossed at 90°, so the extremum is not at a symmetric point.
-  const Vector7d qg = Coordinates({0.01, -0.1, 0.03}, Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(-std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
+  const Vector7d qg = Coordinates(
+      {0.01, -0.1, 0.03},
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
+                         Eigen::AngleAxisd(-std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
   const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(qg);
-  CheckCase({"crossed cylinders", &cyl, &cyl, qf, qg, testing::ClosestGridPair(cyl, pf, cyl, pg, 30), true}, 0.004);
+  CheckCase({"crossed cylinders", &cyl, &cyl, qf, qg,
+             testing::ClosestGridPair(cyl, pf, cyl, pg, 30), true},
+            0.004);
 }
 
 TEST(JacobianTest, ShearedPatchAgainstTorusNonOrthogonal) {
   // Partials meeting at 15°: the strongly non-orthogonal case the closed form was derived for.
-  const nurbs::NurbsSurface sheared = nurbs::MakeShearedPatch(15 * std::numbers::pi / 180, 0.08, 0.01, true);
+  const nurbs::NurbsSurface sheared =
+      nurbs::MakeShearedPatch(15 * std::numbers::pi / 180, 0.08, 0.01, true);
   const nurbs::NurbsSurface torus = nurbs::MakeTorus(0.04, 0.01);
   std::mt19937_64 rng(21);
   for (int pose = 0; pose < 2; ++pose) {
@@ -146,8 +164,13 @@ TEST(JacobianTest, ShearedPatchAgainstTorusNonOrthogonal) {
     // The patch is turned over (its normal S_u × S_v now points down, facing the torus) and lies
     // over the torus tube's top (z = 0.01 at radius 0.04) with its dome hanging towards it;
     // F = patch (non-orthogonal), G = torus.
-    const Vector7d qf = testing::Transform(x, Coordinates({0.0, 0.0, 0.025}, Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX()))));
-    const Vector7d qg = testing::Transform(x, Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
+    const Vector7d qf = testing::Transform(
+        x, Coordinates(
+               {0.0, 0.0, 0.025},
+               Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()) *
+                                  Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX()))));
+    const Vector7d qg =
+        testing::Transform(x, Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
     const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(qg);
     CheckCase({"sheared-torus pose " + std::to_string(pose), &sheared, &torus, qf, qg,
                testing::ClosestGridPair(sheared, pf, torus, pg, 40), false},
@@ -175,39 +198,60 @@ TEST(JacobianTest, RandomRationalBicubicAgainstSphere) {
   }
   const nurbs::NurbsSurface sheet(raw.knots_u(), raw.knots_v(), pts, w);
   const nurbs::NurbsSurface sphere = nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.02);
-  const Eigen::Vector3d mid = sheet.Evaluate(0.5 * (sheet.knots_u().domain_begin() + sheet.knots_u().domain_end()),
-                                             0.5 * (sheet.knots_v().domain_begin() + sheet.knots_v().domain_end()), 0).S;
-  const Vector7d qf = Coordinates(mid + Eigen::Vector3d(0.002, -0.003, 0.03), Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
+  const Eigen::Vector3d mid =
+      sheet
+          .Evaluate(0.5 * (sheet.knots_u().domain_begin() + sheet.knots_u().domain_end()),
+                    0.5 * (sheet.knots_v().domain_begin() + sheet.knots_v().domain_end()), 0)
+          .S;
+  const Vector7d qf = Coordinates(
+      mid + Eigen::Vector3d(0.002, -0.003, 0.03),
+      Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
   const Vector7d qg = Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity());
   const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(qg);
-  CheckCase({"sphere-rational sheet", &sphere, &sheet, qf, qg, testing::ClosestGridPair(sphere, pf, sheet, pg, 30), false}, 0.003);
+  CheckCase({"sphere-rational sheet", &sphere, &sheet, qf, qg,
+             testing::ClosestGridPair(sphere, pf, sheet, pg, 30), false},
+            0.003);
 }
 
 TEST(JacobianTest, CurveSurfaceClosedFormAndImplicitMatchFiniteDifferences) {
   const nurbs::NurbsSurface sphere = nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.05);
   const double c45 = std::sqrt(0.5);
-  const std::vector<Eigen::Vector3d> pts = {{0.03 * c45, -0.03 * c45, 0}, {0.03 / c45, 0, 0}, {0.03 * c45, 0.03 * c45, 0}};
+  const std::vector<Eigen::Vector3d> pts = {
+      {0.03 * c45, -0.03 * c45, 0}, {0.03 / c45, 0, 0}, {0.03 * c45, 0.03 * c45, 0}};
   const nurbs::NurbsCurve3d arc(nurbs::KnotVector(2, {0, 0, 0, 1, 1, 1}), pts, {1.0, c45, 1.0});
   // Also a trimming-style curve: a line in the parameter domain of a sheared patch on body G.
-  const nurbs::NurbsSurface sheared = nurbs::MakeShearedPatch(15 * std::numbers::pi / 180, 0.08, -0.01, false);
-  const nurbs::NurbsCurve2d trim(nurbs::KnotVector(2, {0, 0, 0, 1, 1, 1}), {{0.1, 0.2}, {0.5, 0.6}, {0.9, 0.4}});
+  const nurbs::NurbsSurface sheared =
+      nurbs::MakeShearedPatch(15 * std::numbers::pi / 180, 0.08, -0.01, false);
+  const nurbs::NurbsCurve2d trim(nurbs::KnotVector(2, {0, 0, 0, 1, 1, 1}),
+                                 {{0.1, 0.2}, {0.5, 0.6}, {0.9, 0.4}});
   const BodyCurve curves[2] = {BodyCurve(&arc), BodyCurve(&sheared, &trim)};
-  const Vector7d qf = Coordinates({0.01, -0.02, 0.0}, Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
+  const Vector7d qf = Coordinates(
+      {0.01, -0.02, 0.0},
+      Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
   const Vector7d qgs[2] = {
-      Coordinates({-0.04, -0.02, 0.08}, Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()))),
-      Coordinates({-0.03, -0.05, 0.07}, Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ())))};
+      Coordinates({-0.04, -0.02, 0.08},
+                  Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()))),
+      Coordinates({-0.03, -0.05, 0.07},
+                  Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ())))};
   for (int c = 0; c < 2; ++c) {
     const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(qgs[c]);
     // Seed: best of a coarse scan over the curve and the sphere's upper half.
     Eigen::Vector3d seed;
     double best = INFINITY;
-    for (int a = 0; a < 40; ++a) for (int b = 0; b < 20; ++b) for (int t = 0; t <= 20; ++t) {
-      const Eigen::Vector3d u(a / 40.0, 0.1 + 0.8 * b / 20.0, t / 20.0);
-      int sp = 0;
-      nurbs::SpanHint sh;
-      const double d = (pf.Point(sphere.Evaluate(u[0], u[1], 0).S) - pg.Point(curves[c].Evaluate(u[2], &sp, &sh).C)).norm();
-      if (d < best) { best = d; seed = u; }
-    }
+    for (int a = 0; a < 40; ++a)
+      for (int b = 0; b < 20; ++b)
+        for (int t = 0; t <= 20; ++t) {
+          const Eigen::Vector3d u(a / 40.0, 0.1 + 0.8 * b / 20.0, t / 20.0);
+          int sp = 0;
+          nurbs::SpanHint sh;
+          const double d = (pf.Point(sphere.Evaluate(u[0], u[1], 0).S) -
+                            pg.Point(curves[c].Evaluate(u[2], &sp, &sh).C))
+                               .norm();
+          if (d < best) {
+            best = d;
+            seed = u;
+          }
+        }
     const CurveSurfaceExtremum e = SolveCurveSurface(sphere, pf, curves[c], pg, seed);
     ASSERT_EQ(e.status, ExtremalStatus::kConverged) << "curve " << c;
     nurbs::SpanHint hf, hg;
@@ -222,7 +266,9 @@ TEST(JacobianTest, CurveSurfaceClosedFormAndImplicitMatchFiniteDifferences) {
       for (int s = 0; s < 2; ++s) {
         Vector7d a = qf, b = qgs[c];
         (i < 7 ? a[i] : b[i - 7]) += (s == 0 ? kH : -kH);
-        u[s] = SolveCurveSurface(sphere, BodyPose::FromCoordinates(a), curves[c], BodyPose::FromCoordinates(b), e.u).u;
+        u[s] = SolveCurveSurface(sphere, BodyPose::FromCoordinates(a), curves[c],
+                                 BodyPose::FromCoordinates(b), e.u)
+                   .u;
       }
       fd.col(i) = (u[0] - u[1]) / (2 * kH);
     }

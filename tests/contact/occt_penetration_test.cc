@@ -25,13 +25,21 @@ using testing::Coordinates;
 TEST(OcctPenetrationTest, PenetrationExtremumThatGlobalExtremaMiss) {
   // The contact benchmark's rational bicubic pair, 4 mm interpenetrating; and a sphere sunk
   // 1 cm into a plane patch.
-  const nurbs::NurbsSurface f = nurbs::MakeShearedPatch(15 * std::numbers::pi / 180, 0.06, 0.006, true);
-  const nurbs::NurbsSurface g = nurbs::MakeShearedPatch(80 * std::numbers::pi / 180, 0.06, 0.01, true);
-  const Vector7d qf = Coordinates({0.01, 0.032, 0.004}, Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX())));
+  const nurbs::NurbsSurface f =
+      nurbs::MakeShearedPatch(15 * std::numbers::pi / 180, 0.06, 0.006, true);
+  const nurbs::NurbsSurface g =
+      nurbs::MakeShearedPatch(80 * std::numbers::pi / 180, 0.06, 0.01, true);
+  const Vector7d qf = Coordinates(
+      {0.01, 0.032, 0.004},
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
+                         Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX())));
   const Vector7d qg = Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity());
   const nurbs::NurbsSurface sphere = nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.03);
-  const nurbs::NurbsSurface plane = nurbs::MakePlanePatch({-0.1, -0.1, 0}, {0.2, 0, 0}, {0, 0.2, 0});
-  const Vector7d qs = Coordinates({0.005, 0.002, 0.02}, Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
+  const nurbs::NurbsSurface plane =
+      nurbs::MakePlanePatch({-0.1, -0.1, 0}, {0.2, 0, 0}, {0, 0.2, 0});
+  const Vector7d qs = Coordinates(
+      {0.005, 0.002, 0.02},
+      Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
   struct Case {
     const char* name;
     const nurbs::NurbsSurface *a, *b;
@@ -41,13 +49,15 @@ TEST(OcctPenetrationTest, PenetrationExtremumThatGlobalExtremaMiss) {
   const Case cases[] = {{"rational bicubic pair", &f, &g, qf, qg, 0.0},
                         {"sphere in plane", &sphere, &plane, qs, qg, -0.01}};
   for (const Case& c : cases) {
-    GeomAPI_ExtremaSurfaceSurface global(testing::ToOcctPlaced(*c.a, c.qa), testing::ToOcctPlaced(*c.b, c.qb));
+    GeomAPI_ExtremaSurfaceSurface global(testing::ToOcctPlaced(*c.a, c.qa),
+                                         testing::ToOcctPlaced(*c.b, c.qb));
     std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> occt_pairs;
     std::string occt_distances;
     for (int i = 1; i <= global.NbExtrema(); ++i) {
       gp_Pnt p1, p2;
       global.Points(i, p1, p2);
-      occt_pairs.emplace_back(Eigen::Vector3d(p1.X(), p1.Y(), p1.Z()), Eigen::Vector3d(p2.X(), p2.Y(), p2.Z()));
+      occt_pairs.emplace_back(Eigen::Vector3d(p1.X(), p1.Y(), p1.Z()),
+                              Eigen::Vector3d(p2.X(), p2.Y(), p2.Z()));
       occt_distances += " " + std::to_string(global.Distance(i));
     }
     // Ours, from seeds spread over the domains: keep the deepest converged extremum with facing
@@ -59,7 +69,8 @@ TEST(OcctPenetrationTest, PenetrationExtremumThatGlobalExtremaMiss) {
     Eigen::Vector3d p_a = Eigen::Vector3d::Zero(), p_b = Eigen::Vector3d::Zero();
     int found = 0;
     for (int k = 0; k < 50; ++k) {
-      const SurfaceSurfaceExtremum e = SolveSurfaceSurface(*c.a, pa, *c.b, pb, {unit(rng), unit(rng), unit(rng), unit(rng)});
+      const SurfaceSurfaceExtremum e =
+          SolveSurfaceSurface(*c.a, pa, *c.b, pb, {unit(rng), unit(rng), unit(rng), unit(rng)});
       if (e.status != ExtremalStatus::kConverged || e.beta >= 0 || e.alignment > -0.99) continue;
       ++found;
       if (e.beta < deepest) {
@@ -69,9 +80,10 @@ TEST(OcctPenetrationTest, PenetrationExtremumThatGlobalExtremaMiss) {
         p_b = e.p_g;
       }
     }
-    std::printf("%s: OCCT global extrema at distances%s m; ours: penetration extremum beta = "
-                "%.5f m (alignment %.6f) from %d of 50 seeds\n",
-                c.name, occt_distances.c_str(), deepest, alignment, found);
+    std::printf(
+        "%s: OCCT global extrema at distances%s m; ours: penetration extremum beta = "
+        "%.5f m (alignment %.6f) from %d of 50 seeds\n",
+        c.name, occt_distances.c_str(), deepest, alignment, found);
     EXPECT_GT(found, 0) << c.name;
     EXPECT_LT(deepest, 0.0) << c.name;
     EXPECT_NEAR(alignment, -1.0, 1e-9) << c.name;

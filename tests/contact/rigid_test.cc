@@ -49,8 +49,7 @@ TEST(RigidTest, NormalizedRotateDerivativeMatchesFiniteDifferencesAndRigidForm) 
     const Matrix34d d = RotateDerivative(Q, v);
     for (int i = 0; i < 4; ++i) {
       const Eigen::Vector4d e = Eigen::Vector4d::Unit(i) * kH;
-      const Eigen::Vector3d fd =
-          (RotationMatrix(Q + e) * v - RotationMatrix(Q - e) * v) / (2 * kH);
+      const Eigen::Vector3d fd = (RotationMatrix(Q + e) * v - RotationMatrix(Q - e) * v) / (2 * kH);
       EXPECT_LT((d.col(i) - fd).norm(), kTol);
     }
     // At unit Q: ∂(R v)/∂Q = −[R v]× R G(Q), i.e. the velocity w × (R v) of a rigid rotation.
@@ -68,7 +67,8 @@ TEST(RigidTest, GBodyGivesBodyAngularVelocityAndTorqueMapConservesPower) {
     Qdot -= Q * Q.dot(Qdot);  // Unit-norm-preserving motion.
     // R(t) = R(Q + t Q̇): Rᵀ Ṙ = [w_B]×, Ṙ Rᵀ = [w_W]×.
     const Eigen::Matrix3d R = RotationMatrix(Q);
-    const Eigen::Matrix3d Rdot = (RotationMatrix(Q + kH * Qdot) - RotationMatrix(Q - kH * Qdot)) / (2 * kH);
+    const Eigen::Matrix3d Rdot =
+        (RotationMatrix(Q + kH * Qdot) - RotationMatrix(Q - kH * Qdot)) / (2 * kH);
     const Eigen::Matrix3d wB = R.transpose() * Rdot, wW = Rdot * R.transpose();
     const Eigen::Vector3d omega_B(wB(2, 1), wB(0, 2), wB(1, 0));
     const Eigen::Vector3d omega_W(wW(2, 1), wW(0, 2), wW(1, 0));

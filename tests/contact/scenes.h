@@ -36,10 +36,12 @@ inline Eigen::Vector4d ClosestGridPair(const nurbs::NurbsSurface& f, const BodyP
     std::vector<std::pair<Eigen::Vector2d, Eigen::Vector3d>> pts;
     for (int i = 0; i <= n; ++i) {
       for (int j = 0; j <= n; ++j) {
-        const double u = s.knots_u().domain_begin() +
-                         (s.knots_u().domain_end() - s.knots_u().domain_begin()) * (i + 0.5) / (n + 1);
-        const double v = s.knots_v().domain_begin() +
-                         (s.knots_v().domain_end() - s.knots_v().domain_begin()) * (j + 0.5) / (n + 1);
+        const double u =
+            s.knots_u().domain_begin() +
+            (s.knots_u().domain_end() - s.knots_u().domain_begin()) * (i + 0.5) / (n + 1);
+        const double v =
+            s.knots_v().domain_begin() +
+            (s.knots_v().domain_end() - s.knots_v().domain_begin()) * (j + 0.5) / (n + 1);
         pts.push_back({{u, v}, p.Point(s.Evaluate(u, v, 0).S)});
       }
     }

@@ -17,20 +17,25 @@ namespace {
 using testing::Coordinates;
 
 struct ShearedTorus {
-  nurbs::NurbsSurface sheared = nurbs::MakeShearedPatch(15 * std::numbers::pi / 180, 0.08, 0.01, true);
+  nurbs::NurbsSurface sheared =
+      nurbs::MakeShearedPatch(15 * std::numbers::pi / 180, 0.08, 0.01, true);
   nurbs::NurbsSurface torus = nurbs::MakeTorus(0.04, 0.01);
   // The patch face-down over the torus tube; t moves it along a smooth path (1 s of a hand).
   Vector7d Patch(double t) const {
-    const Eigen::Quaterniond rot(Eigen::AngleAxisd(0.2 + 0.3 * t, Eigen::Vector3d::UnitZ()) *
-                                 Eigen::AngleAxisd(std::numbers::pi + 0.1 * std::sin(3 * t), Eigen::Vector3d::UnitX()));
+    const Eigen::Quaterniond rot(
+        Eigen::AngleAxisd(0.2 + 0.3 * t, Eigen::Vector3d::UnitZ()) *
+        Eigen::AngleAxisd(std::numbers::pi + 0.1 * std::sin(3 * t), Eigen::Vector3d::UnitX()));
     return Coordinates({0.004 * std::sin(2 * t), 0.003 * t, 0.025 - 0.006 * t}, rot);
   }
-  Vector7d Torus() const { return Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()); }
+  Vector7d Torus() const {
+    return Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity());
+  }
 };
 
 TEST(TrackerTest, FollowsTheExactExtremumAtServoRateWithoutAllocating) {
   const ShearedTorus s;
-  const BodyPose pf = BodyPose::FromCoordinates(s.Patch(0)), pg = BodyPose::FromCoordinates(s.Torus());
+  const BodyPose pf = BodyPose::FromCoordinates(s.Patch(0)),
+                 pg = BodyPose::FromCoordinates(s.Torus());
   const SurfaceSurfaceExtremum start = SolveSurfaceSurface(
       s.sheared, pf, s.torus, pg, testing::ClosestGridPair(s.sheared, pf, s.torus, pg, 40));
   ASSERT_EQ(start.status, ExtremalStatus::kConverged);
@@ -53,8 +58,8 @@ TEST(TrackerTest, FollowsTheExactExtremumAtServoRateWithoutAllocating) {
   // level of the predictor's O(Δq²) residual squared, far below 1e-10 in parameters.
   double worst = 0.0;
   for (size_t k = 49; k < path.size(); k += 50) {
-    const SurfaceSurfaceExtremum exact = SolveSurfaceSurface(
-        s.sheared, BodyPose::FromCoordinates(path[k]), s.torus, pg, tracked[k]);
+    const SurfaceSurfaceExtremum exact =
+        SolveSurfaceSurface(s.sheared, BodyPose::FromCoordinates(path[k]), s.torus, pg, tracked[k]);
     ASSERT_EQ(exact.status, ExtremalStatus::kConverged);
     worst = std::max(worst, (exact.u - tracked[k]).cwiseAbs().maxCoeff());
   }
@@ -64,13 +69,14 @@ TEST(TrackerTest, FollowsTheExactExtremumAtServoRateWithoutAllocating) {
 
 TEST(TrackerTest, ReportsBoundaryJumpsAndSingularities) {
   const nurbs::NurbsSurface sphere = nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.05);
-  const nurbs::NurbsSurface patch = nurbs::MakePlanePatch({-0.05, -0.05, 0}, {0.1, 0, 0}, {0, 0.1, 0});
+  const nurbs::NurbsSurface patch =
+      nurbs::MakePlanePatch({-0.05, -0.05, 0}, {0.1, 0, 0}, {0, 0.1, 0});
   const Eigen::Quaterniond turn(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()));
   const Vector7d plane = Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity());
   ContactTracker tracker(sphere, patch);
-  const SurfaceSurfaceExtremum e = SolveSurfaceSurface(
-      sphere, BodyPose::FromCoordinates(Coordinates({0, 0, 0.06}, turn)), patch,
-      BodyPose::FromCoordinates(plane), Eigen::Vector4d(0.75, 0.5, 0.5, 0.5));
+  const SurfaceSurfaceExtremum e =
+      SolveSurfaceSurface(sphere, BodyPose::FromCoordinates(Coordinates({0, 0, 0.06}, turn)), patch,
+                          BodyPose::FromCoordinates(plane), Eigen::Vector4d(0.75, 0.5, 0.5, 0.5));
   ASSERT_EQ(tracker.Reset(Coordinates({0, 0, 0.06}, turn), plane, e.u), TrackStatus::kTracked);
   // Slide the sphere sideways past the patch's edge at x = 0.05: the plane point stops there.
   TrackStatus last = TrackStatus::kTracked;
@@ -80,12 +86,17 @@ TEST(TrackerTest, ReportsBoundaryJumpsAndSingularities) {
   // A jump far beyond the predictor's reach is reported lost, not followed to another point.
   ContactTracker jumper(sphere, patch);
   jumper.Reset(Coordinates({0, 0, 0.06}, turn), plane, e.u);
-  EXPECT_EQ(jumper.Step(Coordinates({0, 0, 0.06}, Eigen::Quaterniond(Eigen::AngleAxisd(2.5, Eigen::Vector3d::UnitY())) * turn), plane),
-            TrackStatus::kLost);
+  EXPECT_EQ(
+      jumper.Step(
+          Coordinates({0, 0, 0.06},
+                      Eigen::Quaterniond(Eigen::AngleAxisd(2.5, Eigen::Vector3d::UnitY())) * turn),
+          plane),
+      TrackStatus::kLost);
   // Concentric spheres: a continuum of extremal pairs, ∂F/∂u singular.
   const nurbs::NurbsSurface outer = nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.1);
   ContactTracker concentric(sphere, outer);
-  EXPECT_EQ(concentric.Reset(Coordinates(Eigen::Vector3d::Zero(), turn), plane, Eigen::Vector4d(0.3, 0.5, 0.3, 0.5)),
+  EXPECT_EQ(concentric.Reset(Coordinates(Eigen::Vector3d::Zero(), turn), plane,
+                             Eigen::Vector4d(0.3, 0.5, 0.3, 0.5)),
             TrackStatus::kSingular);
 }
 
