@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <numbers>
 
 #include "tests/contact/scenes.h"
@@ -64,7 +65,7 @@ TEST(TrackerTest, FollowsTheExactExtremumAtServoRateWithoutAllocating) {
     worst = std::max(worst, (exact.u - tracked[k]).cwiseAbs().maxCoeff());
   }
   EXPECT_LT(worst, 1e-10);
-  RecordProperty("worst_parameter_error", std::to_string(worst));
+  std::printf("tracking 1000 servo steps: worst parameter error vs a full solve %.1e\n", worst);
 }
 
 TEST(TrackerTest, ReportsBoundaryJumpsAndSingularities) {
