@@ -6,18 +6,6 @@
 
 namespace tangent::contact {
 
-namespace internal {
-
-Eigen::Matrix3d ContactFrame(const PlacedSurfacePoint& p) {
-  Eigen::Matrix3d r;
-  r.col(0) = p.world.S_u.normalized();
-  r.col(2) = p.N.normalized();
-  r.col(1) = r.col(2).cross(r.col(0));
-  return r;
-}
-
-}  // namespace internal
-
 namespace {
 
 // Derivative of the unit normal n = N/|N| along a parameter, given N's derivative.
@@ -186,8 +174,8 @@ bool ContactJacobianClosedForm(const SurfacePairEval& e, const BodyPose& pose_f,
 bool ContactJacobianMontana(const SurfacePairEval& e, const BodyPose& pose_f,
                             const BodyPose& pose_g, Matrix4x14* u_q) {
   u_q->setZero();
-  const Eigen::Matrix3d frame_f = internal::ContactFrame(e.f);
-  const Eigen::Matrix3d frame_g = internal::ContactFrame(e.g);
+  const Eigen::Matrix3d frame_f = ContactFrame(e.f);
+  const Eigen::Matrix3d frame_g = ContactFrame(e.g);
   Eigen::Matrix2d Ef, Ff, Eg, Fg, iEf, iEg;
   FundamentalBlocks(e.f, frame_f, &Ef, &Ff);
   FundamentalBlocks(e.g, frame_g, &Eg, &Fg);
@@ -251,7 +239,7 @@ bool CurveSurfaceJacobianImplicit(const CurveSurfaceEval& e, const BodyPose& pos
 bool CurveSurfaceJacobianClosedForm(const CurveSurfaceEval& e, const BodyPose& pose_f,
                                     const BodyPose& pose_g, Matrix3x14* u_q) {
   u_q->setZero();
-  const Eigen::Matrix3d frame = internal::ContactFrame(e.f);
+  const Eigen::Matrix3d frame = ContactFrame(e.f);
   Eigen::Matrix2d Ef, Ff;
   FundamentalBlocks(e.f, frame, &Ef, &Ff);
   const Eigen::Matrix<double, 2, 3> P = frame.leftCols<2>().transpose();

@@ -55,9 +55,4 @@ bool CurveSurfaceJacobianImplicit(const CurveSurfaceEval& e, const BodyPose& pos
 bool CurveSurfaceJacobianClosedForm(const CurveSurfaceEval& e, const BodyPose& pose_f,
                                     const BodyPose& pose_g, Matrix3x14* u_q);
 
-namespace internal {
-/// Contact frame (x, y, z) of a surface point: x = S_u/|S_u|, z = N/|N|, y = z × x.
-Eigen::Matrix3d ContactFrame(const PlacedSurfacePoint& p);
-}  // namespace internal
-
 }  // namespace tangent::contact

@@ -168,7 +168,9 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   out.u = r.x;
   out.p_f = e.f.world.S;
   out.p_g = e.g.world.S;
-  out.n_g = e.g.N.normalized();
+  out.frame_f = ContactFrame(e.f);
+  out.frame_g = ContactFrame(e.g);
+  out.n_g = out.frame_g.col(2);
   out.beta = e.d.dot(out.n_g);
   out.alignment = e.f.N.normalized().dot(out.n_g);
   out.status = StatusOf(r);
@@ -202,7 +204,8 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
   PointSurfaceExtremum out;
   out.u = r.x;
   out.p_f = p.world.S;
-  out.distance = (x_W - p.world.S).dot(p.N.normalized());
+  out.frame_f = ContactFrame(p);
+  out.distance = (x_W - p.world.S).dot(out.frame_f.col(2));
   out.status = StatusOf(r);
   out.kind = internal::Classify<2>(s.hess, r.active, s.scale);
   out.at_bound = r.active;
@@ -259,7 +262,8 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
   out.u = r.x;
   out.p_f = e.f.world.S;
   out.p_g = e.g.world.C;
-  out.beta = e.d.dot(e.f.N.normalized());
+  out.frame_f = ContactFrame(e.f);
+  out.beta = e.d.dot(out.frame_f.col(2));
   out.status = StatusOf(r);
   out.kind = internal::Classify<3>(e.hess, r.active,
                                    std::max(FirstFormScale(e.f.world), e.g.world.C1.squaredNorm()));

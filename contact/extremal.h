@@ -58,6 +58,8 @@ struct SurfaceSurfaceExtremum {
   double beta = 0.0;         ///< signed distance d·n_g: > 0 apart, < 0 interpenetrating (m)
   Eigen::Vector3d p_f, p_g;  ///< contact points, world (m)
   Eigen::Vector3d n_g;       ///< unit outward normal of g at p_g, world
+  Eigen::Matrix3d frame_f;   ///< contact frame of f at p_f (ContactFrame; NaN at a pole)
+  Eigen::Matrix3d frame_g;   ///< contact frame of g at p_g
   double alignment = 0.0;    ///< n_f·n_g: −1 for surfaces facing each other
   ExtremalStatus status = ExtremalStatus::kNotConverged;
   ExtremumKind kind = ExtremumKind::kDegenerate;
@@ -79,6 +81,7 @@ struct PointSurfaceExtremum {
   Eigen::Vector2d u;
   double distance = 0.0;  ///< (x − f)·n_f: > 0 when x is on the outward side (m)
   Eigen::Vector3d p_f;
+  Eigen::Matrix3d frame_f;  ///< contact frame of f at p_f
   ExtremalStatus status = ExtremalStatus::kNotConverged;
   ExtremumKind kind = ExtremumKind::kDegenerate;
   std::array<bool, 2> at_bound{};
@@ -107,6 +110,7 @@ struct CurveSurfaceExtremum {
   Eigen::Vector3d u;  ///< (u, v) on f, τ on the curve
   double beta = 0.0;  ///< (g − f)·n_f: > 0 when the curve is outside f (m)
   Eigen::Vector3d p_f, p_g;
+  Eigen::Matrix3d frame_f;  ///< contact frame of f at p_f
   ExtremalStatus status = ExtremalStatus::kNotConverged;
   ExtremumKind kind = ExtremumKind::kDegenerate;
   std::array<bool, 3> at_bound{};

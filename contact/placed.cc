@@ -71,6 +71,14 @@ void EvaluatePlaced(const BodyCurve& curve, const BodyPose& pose, double tau, in
   out->world.C2 = pose.R * out->body.C2;
 }
 
+Eigen::Matrix3d ContactFrame(const PlacedSurfacePoint& p) {
+  Eigen::Matrix3d r;
+  r.col(0) = p.world.S_u.normalized();
+  r.col(2) = p.N.normalized();
+  r.col(1) = r.col(2).cross(r.col(0));
+  return r;
+}
+
 Matrix37d PointJacobian(const BodyPose& pose, const Eigen::Vector3d& p_B) {
   Matrix37d j;
   j.leftCols<3>().setIdentity();

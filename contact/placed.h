@@ -58,6 +58,11 @@ struct PlacedCurvePoint {
 void EvaluatePlaced(const BodyCurve& curve, const BodyPose& pose, double tau, int* span_hint,
                     nurbs::SpanHint* surface_hint, PlacedCurvePoint* out);
 
+/// The contact frame of a surface point (seed 001 Appendix A), columns x, y, z in W:
+/// x = S_u/|S_u|, z = N/|N| (outward normal), y = z × x. @pre S_u ≠ 0 and N ≠ 0 (not at a pole);
+/// at one, the columns are NaN.
+Eigen::Matrix3d ContactFrame(const PlacedSurfacePoint& p);
+
 /// ∂x_W/∂q_B (3 x 7) of a body-fixed point with body coordinates p_B: [I, ∂(R p_B)/∂Q].
 Matrix37d PointJacobian(const BodyPose& pose, const Eigen::Vector3d& p_B);
 /// ∂a_W/∂q_B (3 x 7) of a body-fixed direction a_B (a partial, a normal): [0, ∂(R a_B)/∂Q].
