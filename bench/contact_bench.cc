@@ -17,6 +17,7 @@
 #include <numbers>
 #include <random>
 
+#include "bench/median_reporter.h"
 #include "contact/contact_jacobian.h"
 #include "contact/tracker.h"
 #include "nurbs/primitives.h"
@@ -139,21 +140,6 @@ void BM_Uq(benchmark::State& state) {
   }
 }
 
-class Reporter : public benchmark::ConsoleReporter {
- public:
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const Run& r : runs) {
-      if (r.error_occurred) continue;
-      const bool median = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median";
-      if (median || (r.run_type == Run::RT_Iteration && !times.count(r.run_name.str()))) {
-        times[r.run_name.str()] = r.GetAdjustedRealTime();
-      }
-    }
-    ConsoleReporter::ReportRuns(runs);
-  }
-  std::map<std::string, double> times;
-};
-
 void ConvergenceReport() {
   const Scene& s = GetScene();
   std::printf(
@@ -199,12 +185,9 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("ours_uq_ift/rational_bicubic", BM_Uq<false>);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  Reporter r;
+  tangent::bench::MedianReporter r;
   benchmark::RunSpecifiedBenchmarks(&r);
-  auto t = [&](const char* n) {
-    const auto it = r.times.find(n);
-    return it == r.times.end() ? -1.0 : it->second;
-  };
+  auto t = [&](const char* n) { return r.Get(n); };
   const double track = t("ours_track/rational_bicubic/servo_1ms");
   const double occt = t("occt_locate_ss/rational_bicubic/seed_0.01");
   const double closed = t("ours_uq_closed/rational_bicubic");

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/median_reporter.h"
 #include "nurbs/refinement.h"
 #include "tests/nurbs/occt_convert.h"
 #include "tests/nurbs/random_nurbs.h"
@@ -147,29 +148,7 @@ void RegisterOrder(const Case& c, const std::string& pattern, const Params* p) {
                                });
 }
 
-// Collects the per-benchmark time (the median when repetitions are requested) for the summary.
-class RatioReporter : public benchmark::ConsoleReporter {
- public:
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const Run& r : runs) {
-      if (r.error_occurred) continue;
-      const bool median = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median";
-      if (median || (r.run_type == Run::RT_Iteration && !times_.count(r.run_name.str()))) {
-        times_[r.run_name.str()] = r.GetAdjustedRealTime();  // ns per evaluation
-      }
-    }
-    ConsoleReporter::ReportRuns(runs);
-  }
-  double Get(const std::string& name) const {
-    const auto it = times_.find(name);
-    return it == times_.end() ? -1.0 : it->second;
-  }
-
- private:
-  std::map<std::string, double> times_;
-};
-
-void PrintSummary(const RatioReporter& r) {
+void PrintSummary(const bench::MedianReporter& r) {
   std::printf("\nSurface evaluation, ns per point (median), and ratios (same run):\n");
   std::printf("%-6s %-12s %-7s %10s %10s %10s %10s %10s\n", "order", "case", "pattern", "ours_fast",
               "reference", "refinement", "occt_geom", "occt_adapt");
@@ -228,7 +207,7 @@ int main(int argc, char** argv) {
   }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  RatioReporter reporter;
+  tangent::bench::MedianReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   PrintSummary(reporter);
   benchmark::Shutdown();
