@@ -1,0 +1,225 @@
+#include "optimizer/goals.h"
+
+#include <stdexcept>
+
+#include "contact/rigid.h"
+
+namespace tangent::optimizer {
+
+namespace {
+
+using Matrix37 = Eigen::Matrix<double, 3, 7>;
+
+class Position final : public Term {
+ public:
+  Position(const Attachment& at, const Eigen::Vector3d& t) : at_(at), t_(t) {}
+  std::string name() const override { return "position_goal"; }
+  int dim() const override { return 3; }
+  int body_a() const override { return at_.body; }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd>) const override {
+    const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+    r = p.Point(at_.point) - t_;
+    J_a = contact::PointJacobian(p, at_.point);
+  }
+
+ private:
+  Attachment at_;
+  Eigen::Vector3d t_;
+};
+
+class Orientation final : public Term {
+ public:
+  Orientation(int body, const Eigen::Matrix3d& R, const Eigen::Vector3d& w) : body_(body), R_(R), w_(w) {
+    if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-9) {
+      throw std::invalid_argument("orientation goal: target is not a rotation matrix");
+    }
+  }
+  std::string name() const override { return "orientation_goal"; }
+  int dim() const override { return 9; }
+  int body_a() const override { return body_; }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd>) const override {
+    const BodyPose& p = poses[static_cast<size_t>(body_)];
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d e = Eigen::Vector3d::Unit(i);
+      r.segment<3>(3 * i) = w_[i] * (p.R * e - R_.col(i));
+      J_a.middleRows<3>(3 * i) = w_[i] * contact::DirectionJacobian(p, e);
+    }
+  }
+
+ private:
+  int body_;
+  Eigen::Matrix3d R_;
+  Eigen::Vector3d w_;
+};
+
+class Concat final : public Term {
+ public:
+  Concat(TermPtr a, TermPtr b) : a_(std::move(a)), b_(std::move(b)) {}
+  std::string name() const override { return "pose_goal"; }
+  int dim() const override { return a_->dim() + b_->dim(); }
+  int body_a() const override { return a_->body_a(); }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override {
+    const int n = a_->dim();
+    a_->Evaluate(poses, r.head(n), J_a.topRows(n), J_b.topRows(n));
+    b_->Evaluate(poses, r.tail(b_->dim()), J_a.bottomRows(b_->dim()), J_b.bottomRows(b_->dim()));
+  }
+
+ private:
+  TermPtr a_, b_;
+};
+
+class Aiming final : public Term {
+ public:
+  Aiming(const Attachment& at, const Eigen::Vector3d& t) : at_(at), t_(t) { at_.axis.normalize(); }
+  std::string name() const override { return "aiming_goal"; }
+  int dim() const override { return 3; }
+  int body_a() const override { return at_.body; }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd>) const override {
+    const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+    const Eigen::Vector3d P = p.Point(at_.point);
+    const Eigen::Vector3d v = t_ - P;
+    const double len = v.norm();
+    const Eigen::Vector3d u = v / len;
+    r = p.R * at_.axis - u;
+    // d(v/|v|) = (I − u uᵀ) dv / |v|, dv = −dP.
+    const Eigen::Matrix3d du_dP = -(Eigen::Matrix3d::Identity() - u * u.transpose()) / len;
+    J_a = contact::DirectionJacobian(p, at_.axis) - du_dP * contact::PointJacobian(p, at_.point);
+  }
+
+ private:
+  Attachment at_;
+  Eigen::Vector3d t_;
+};
+
+class Line final : public Term {
+ public:
+  Line(const Attachment& at, const Eigen::Vector3d& o, const Eigen::Vector3d& d)
+      : at_(at), o_(o), P_(Eigen::Matrix3d::Identity() - d.normalized() * d.normalized().transpose()) {}
+  std::string name() const override { return "line_goal"; }
+  int dim() const override { return 3; }
+  int body_a() const override { return at_.body; }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd>) const override {
+    const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+    r = P_ * (p.Point(at_.point) - o_);
+    J_a = P_ * contact::PointJacobian(p, at_.point);
+  }
+
+ private:
+  Attachment at_;
+  Eigen::Vector3d o_;
+  Eigen::Matrix3d P_;
+};
+
+class Plane final : public Term {
+ public:
+  Plane(const Attachment& at, const Eigen::Vector3d& o, const Eigen::Vector3d& n, bool half, bool one_sided)
+      : at_(at), o_(o), n_(n.normalized()), half_(half), one_sided_(one_sided) {}
+  std::string name() const override { return half_ ? "half_space_goal" : "plane_goal"; }
+  int dim() const override { return 1; }
+  int body_a() const override { return at_.body; }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd>) const override {
+    const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+    const double s = n_.dot(p.Point(at_.point) - o_);
+    if (one_sided_ && s > 0) {
+      r[0] = 0.0;
+      J_a.setZero();
+      return;
+    }
+    r[0] = s;
+    J_a = n_.transpose() * contact::PointJacobian(p, at_.point);
+  }
+
+ private:
+  Attachment at_;
+  Eigen::Vector3d o_, n_;
+  bool half_, one_sided_;
+};
+
+class Disjunction final : public Term {
+ public:
+  explicit Disjunction(std::vector<TermPtr> goals) : goals_(std::move(goals)) {
+    if (goals_.empty()) throw std::invalid_argument("disjunction goal: no goals");
+    for (const auto& g : goals_) {
+      dim_ = std::max(dim_, g->dim());
+      if (g->body_a() != goals_[0]->body_a() || g->body_b() != goals_[0]->body_b()) {
+        throw std::invalid_argument("disjunction goal: all goals must act on the same bodies");
+      }
+    }
+    r_.resize(dim_);
+    ja_.resize(dim_, 7);
+    jb_.resize(dim_, 7);
+  }
+  std::string name() const override { return "disjunction_goal"; }
+  int dim() const override { return dim_; }
+  int body_a() const override { return goals_[0]->body_a(); }
+  int body_b() const override { return goals_[0]->body_b(); }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override {
+    double best = INFINITY;
+    r.setZero();
+    J_a.setZero();
+    J_b.setZero();
+    for (const auto& g : goals_) {
+      const int n = g->dim();
+      g->Evaluate(poses, r_.head(n), ja_.topRows(n), jb_.topRows(n));
+      const double v = r_.head(n).squaredNorm();
+      if (v < best) {
+        best = v;
+        r.setZero();
+        J_a.setZero();
+        J_b.setZero();
+        r.head(n) = r_.head(n);
+        J_a.topRows(n) = ja_.topRows(n);
+        J_b.topRows(n) = jb_.topRows(n);
+      }
+    }
+  }
+
+ private:
+  std::vector<TermPtr> goals_;
+  int dim_ = 0;
+  // Scratch, sized once (Evaluate stays allocation free; not thread safe, like every Term's use
+  // by one solver).
+  mutable Eigen::VectorXd r_;
+  mutable Eigen::MatrixXd ja_, jb_;
+};
+
+}  // namespace
+
+TermPtr PositionGoal(const Attachment& at, const Eigen::Vector3d& t) {
+  return std::make_shared<Position>(at, t);
+}
+TermPtr OrientationGoal(int body, const Eigen::Matrix3d& R, const Eigen::Vector3d& w) {
+  return std::make_shared<Orientation>(body, R, w);
+}
+TermPtr PoseGoal(const Attachment& at, const Eigen::Vector3d& t, const Eigen::Matrix3d& R,
+                 const Eigen::Vector3d& w) {
+  return std::make_shared<Concat>(PositionGoal(at, t), OrientationGoal(at.body, R, w));
+}
+TermPtr AimingGoal(const Attachment& at, const Eigen::Vector3d& t) {
+  return std::make_shared<Aiming>(at, t);
+}
+TermPtr LineGoal(const Attachment& at, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
+  if (!(d.norm() > 0)) throw std::invalid_argument("line goal: zero direction");
+  return std::make_shared<Line>(at, o, d);
+}
+TermPtr PlaneGoal(const Attachment& at, const Eigen::Vector3d& o, const Eigen::Vector3d& n) {
+  if (!(n.norm() > 0)) throw std::invalid_argument("plane goal: zero normal");
+  return std::make_shared<Plane>(at, o, n, false, false);
+}
+TermPtr HalfSpaceGoal(const Attachment& at, const Eigen::Vector3d& o, const Eigen::Vector3d& n,
+                      bool one_sided) {
+  if (!(n.norm() > 0)) throw std::invalid_argument("half-space goal: zero normal");
+  return std::make_shared<Plane>(at, o, n, true, one_sided);
+}
+TermPtr DisjunctionGoal(std::vector<TermPtr> goals) {
+  return std::make_shared<Disjunction>(std::move(goals));
+}
+
+}  // namespace tangent::optimizer

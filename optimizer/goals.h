@@ -1,0 +1,36 @@
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "optimizer/joints.h"
+
+namespace tangent::optimizer {
+
+/// Goals of seed 002 §5 as terms: usable as weighted objectives (½ w |r|²) or hard constraints.
+/// Position: P − target (3 rows).
+TermPtr PositionGoal(const Attachment& at, const Eigen::Vector3d& target_W);
+/// Orientation with per-axis weights: w_i (R e_i − R_target e_i), i = x, y, z (9 rows; a zero
+/// weight frees rotation that moves that axis only through the others).
+TermPtr OrientationGoal(int body, const Eigen::Matrix3d& R_target, const Eigen::Vector3d& weights);
+/// Position and orientation together (3 + 9 rows).
+TermPtr PoseGoal(const Attachment& at, const Eigen::Vector3d& target_W,
+                 const Eigen::Matrix3d& R_target, const Eigen::Vector3d& weights);
+/// Aiming: the body direction `at.axis` from `at.point` points at target_W:
+/// R axis − (target − P)/|target − P| (3 rows).
+TermPtr AimingGoal(const Attachment& at, const Eigen::Vector3d& target_W);
+/// Line: P on the line through `origin` along `direction`: (I − d dᵀ)(P − origin) (3 rows).
+TermPtr LineGoal(const Attachment& at, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction);
+/// Plane: n·(P − origin) (1 row).
+TermPtr PlaneGoal(const Attachment& at, const Eigen::Vector3d& origin, const Eigen::Vector3d& normal);
+/// Half-space n·(P − origin) ≥ 0. As a constraint the row is n·(P − origin); as an objective
+/// the residual is min(0, n·(P − origin)) (one-sided), so it only acts when violated.
+TermPtr HalfSpaceGoal(const Attachment& at, const Eigen::Vector3d& origin,
+                      const Eigen::Vector3d& normal, bool one_sided);
+/// Disjunction: the goal among `goals` with the smallest |r|² is the active one; its residual is
+/// returned, zero-padded to the largest goal's dimension. Not differentiable where the active
+/// goal switches (the solver sees a different goal from then on).
+TermPtr DisjunctionGoal(std::vector<TermPtr> goals);
+
+}  // namespace tangent::optimizer

@@ -1,0 +1,233 @@
+#include "optimizer/joints.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "contact/rigid.h"
+
+namespace tangent::optimizer {
+
+namespace {
+
+using Matrix37 = Eigen::Matrix<double, 3, 7>;
+
+// World point of an attachment and ∂/∂q_B.
+Eigen::Vector3d Point(const std::vector<BodyPose>& poses, const Attachment& at, Matrix37* J) {
+  const BodyPose& p = poses[static_cast<size_t>(at.body)];
+  *J = contact::PointJacobian(p, at.point);
+  return p.Point(at.point);
+}
+
+// World image of a body-fixed direction and ∂/∂q_B.
+Eigen::Vector3d Direction(const std::vector<BodyPose>& poses, int body, const Eigen::Vector3d& v,
+                          Matrix37* J) {
+  const BodyPose& p = poses[static_cast<size_t>(body)];
+  *J = contact::DirectionJacobian(p, v);
+  return p.R * v;
+}
+
+// Two unit vectors perpendicular to a (and to each other).
+void Perpendiculars(const Eigen::Vector3d& a, Eigen::Vector3d* e1, Eigen::Vector3d* e2) {
+  const Eigen::Vector3d n = a.normalized();
+  *e1 = (std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(n).normalized();
+  *e2 = n.cross(*e1);
+}
+
+Attachment Normalized(Attachment at, const char* joint) {
+  if (!(at.axis.norm() > 0) || !(at.reference.norm() > 0)) {
+    throw std::invalid_argument(std::string(joint) + ": attachment axis and reference must be non-zero");
+  }
+  at.axis.normalize();
+  at.reference = (at.reference - at.axis * at.axis.dot(at.reference));
+  if (!(at.reference.norm() > 1e-9)) {
+    throw std::invalid_argument(std::string(joint) + ": attachment reference is parallel to its axis");
+  }
+  at.reference.normalize();
+  return at;
+}
+
+// The rows a joint is built from. Each appends to r at `row` and to the Jacobian blocks.
+struct Rows {
+  Eigen::Ref<Eigen::VectorXd> r;
+  Eigen::Ref<Eigen::MatrixXd> Ja, Jb;
+  int row = 0;
+
+  // P_a − P_b (3 rows).
+  void Coincide(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b) {
+    Matrix37 ja, jb;
+    r.segment<3>(row) = Point(poses, a, &ja) - Point(poses, b, &jb);
+    Ja.middleRows<3>(row) = ja;
+    Jb.middleRows<3>(row) = -jb;
+    row += 3;
+  }
+  // (R_a u)·(R_b v) (1 row).
+  void Dot(const std::vector<BodyPose>& poses, int ba, const Eigen::Vector3d& u, int bb,
+           const Eigen::Vector3d& v) {
+    Matrix37 ju, jv;
+    const Eigen::Vector3d U = Direction(poses, ba, u, &ju), V = Direction(poses, bb, v, &jv);
+    r[row] = U.dot(V);
+    Ja.row(row) = V.transpose() * ju;
+    Jb.row(row) = U.transpose() * jv;
+    ++row;
+  }
+  // (P_b − P_a)·(R_a e) (1 row): b's point in a's plane through P_a normal to e.
+  void Offset(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b,
+              const Eigen::Vector3d& e) {
+    Matrix37 jpa, jpb, je;
+    const Eigen::Vector3d d = Point(poses, b, &jpb) - Point(poses, a, &jpa);
+    const Eigen::Vector3d E = Direction(poses, a.body, e, &je);
+    r[row] = d.dot(E);
+    Ja.row(row) = -E.transpose() * jpa + d.transpose() * je;
+    Jb.row(row) = E.transpose() * jpb;
+    ++row;
+  }
+};
+
+enum class Kind { kSpherical, kRevolute, kUniversal, kCylindrical, kPrismatic, kFixed };
+
+class Joint final : public Term {
+ public:
+  Joint(Kind kind, const char* name, const Attachment& a, const Attachment& b)
+      : kind_(kind), name_(name), a_(Normalized(a, name)), b_(Normalized(b, name)) {
+    Perpendiculars(b_.axis, &b1_, &b2_);
+    Perpendiculars(a_.axis, &a1_, &a2_);
+  }
+  std::string name() const override { return name_; }
+  int dim() const override {
+    switch (kind_) {
+      case Kind::kSpherical: return 3;
+      case Kind::kRevolute: return 5;
+      case Kind::kUniversal: return 4;
+      case Kind::kCylindrical: return 4;
+      case Kind::kPrismatic: return 5;
+      case Kind::kFixed: return 6;
+    }
+    return 0;
+  }
+  int body_a() const override { return a_.body; }
+  int body_b() const override { return b_.body; }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override {
+    Rows rows{r, J_a, J_b};
+    const bool coincide = kind_ == Kind::kSpherical || kind_ == Kind::kRevolute ||
+                          kind_ == Kind::kUniversal || kind_ == Kind::kFixed;
+    if (coincide) rows.Coincide(poses, a_, b_);
+    if (kind_ == Kind::kUniversal) rows.Dot(poses, a_.body, a_.axis, b_.body, b_.axis);
+    const bool parallel = kind_ == Kind::kRevolute || kind_ == Kind::kCylindrical ||
+                          kind_ == Kind::kPrismatic || kind_ == Kind::kFixed;
+    if (parallel) {  // a's axis against two directions perpendicular to b's axis.
+      rows.Dot(poses, a_.body, a_.axis, b_.body, b1_);
+      rows.Dot(poses, a_.body, a_.axis, b_.body, b2_);
+    }
+    if (kind_ == Kind::kCylindrical || kind_ == Kind::kPrismatic) {  // b's point on a's axis.
+      rows.Offset(poses, a_, b_, a1_);
+      rows.Offset(poses, a_, b_, a2_);
+    }
+    if (kind_ == Kind::kPrismatic || kind_ == Kind::kFixed) {  // No turn about the axis.
+      rows.Dot(poses, a_.body, a_.reference, b_.body, b_.axis.cross(b_.reference));
+    }
+  }
+
+ private:
+  Kind kind_;
+  const char* name_;
+  Attachment a_, b_;
+  Eigen::Vector3d a1_, a2_, b1_, b2_;
+};
+
+class UnitQuaternionTerm final : public Term {
+ public:
+  explicit UnitQuaternionTerm(int body) : body_(body) {}
+  std::string name() const override { return "unit_quaternion"; }
+  int dim() const override { return 1; }
+  int body_a() const override { return body_; }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd>) const override {
+    const Eigen::Vector4d Q = poses[static_cast<size_t>(body_)].q.tail<4>();
+    r[0] = Q.squaredNorm() - 1.0;
+    J_a.setZero();
+    J_a.block<1, 4>(0, 3) = 2.0 * Q.transpose();
+  }
+
+ private:
+  int body_;
+};
+
+// θ = atan2(s, c) with s = (R_a ref_a × R_b ref_b)·(R_a axis), c = (R_a ref_a)·(R_b ref_b).
+double Angle(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b,
+             Eigen::Matrix<double, 1, 7>* dJa, Eigen::Matrix<double, 1, 7>* dJb) {
+  Matrix37 jra, jrb, jax;
+  const Eigen::Vector3d ra = Direction(poses, a.body, a.reference, &jra);
+  const Eigen::Vector3d rb = Direction(poses, b.body, b.reference, &jrb);
+  const Eigen::Vector3d ax = Direction(poses, a.body, a.axis, &jax);
+  const double s = ra.cross(rb).dot(ax);
+  const double c = ra.dot(rb);
+  if (dJa) {
+    // ds = (dra × rb)·ax + (ra × drb)·ax + (ra × rb)·dax = (rb × ax)·dra + (ax × ra)·drb + ...
+    const Eigen::Matrix<double, 1, 7> ds_a = rb.cross(ax).transpose() * jra + ra.cross(rb).transpose() * jax;
+    const Eigen::Matrix<double, 1, 7> ds_b = ax.cross(ra).transpose() * jrb;
+    const Eigen::Matrix<double, 1, 7> dc_a = rb.transpose() * jra;
+    const Eigen::Matrix<double, 1, 7> dc_b = ra.transpose() * jrb;
+    const double inv = 1.0 / (s * s + c * c);
+    *dJa = (c * ds_a - s * dc_a) * inv;
+    *dJb = (c * ds_b - s * dc_b) * inv;
+  }
+  return std::atan2(s, c);
+}
+
+class RevoluteLimitsTerm final : public Term {
+ public:
+  RevoluteLimitsTerm(const Attachment& a, const Attachment& b, double lo, double hi)
+      : a_(Normalized(a, "revolute limits")), b_(Normalized(b, "revolute limits")), lo_(lo), hi_(hi) {
+    if (!(lo < hi)) throw std::invalid_argument("revolute limits: need lo < hi");
+  }
+  std::string name() const override { return "revolute_limits"; }
+  int dim() const override { return 2; }
+  int body_a() const override { return a_.body; }
+  int body_b() const override { return b_.body; }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override {
+    Eigen::Matrix<double, 1, 7> da, db;
+    const double theta = Angle(poses, a_, b_, &da, &db);
+    r[0] = theta - lo_;
+    r[1] = hi_ - theta;
+    J_a.row(0) = da;
+    J_a.row(1) = -da;
+    J_b.row(0) = db;
+    J_b.row(1) = -db;
+  }
+
+ private:
+  Attachment a_, b_;
+  double lo_, hi_;
+};
+
+}  // namespace
+
+TermPtr SphericalJoint(const Attachment& a, const Attachment& b) {
+  return std::make_shared<Joint>(Kind::kSpherical, "spherical", a, b);
+}
+TermPtr RevoluteJoint(const Attachment& a, const Attachment& b) {
+  return std::make_shared<Joint>(Kind::kRevolute, "revolute", a, b);
+}
+TermPtr UniversalJoint(const Attachment& a, const Attachment& b) {
+  return std::make_shared<Joint>(Kind::kUniversal, "universal", a, b);
+}
+TermPtr CylindricalJoint(const Attachment& a, const Attachment& b) {
+  return std::make_shared<Joint>(Kind::kCylindrical, "cylindrical", a, b);
+}
+TermPtr PrismaticJoint(const Attachment& a, const Attachment& b) {
+  return std::make_shared<Joint>(Kind::kPrismatic, "prismatic", a, b);
+}
+TermPtr FixedJoint(const Attachment& a, const Attachment& b) {
+  return std::make_shared<Joint>(Kind::kFixed, "fixed", a, b);
+}
+TermPtr UnitQuaternion(int body) { return std::make_shared<UnitQuaternionTerm>(body); }
+TermPtr RevoluteLimits(const Attachment& a, const Attachment& b, double lo, double hi) {
+  return std::make_shared<RevoluteLimitsTerm>(a, b, lo, hi);
+}
+double RevoluteAngle(const Attachment& a, const Attachment& b, const std::vector<BodyPose>& poses) {
+  return Angle(poses, Normalized(a, "revolute angle"), Normalized(b, "revolute angle"), nullptr, nullptr);
+}
+
+}  // namespace tangent::optimizer

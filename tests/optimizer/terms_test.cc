@@ -1,0 +1,139 @@
+// Every joint, limit and goal: analytic Jacobian blocks against central finite differences of
+// the term over both bodies' 7 coordinates, at seeded random poses (including quaternions off
+// the unit sphere, which the normalized placement must ignore except in UnitQuaternion).
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "optimizer/goals.h"
+#include "optimizer/joints.h"
+
+namespace tangent::optimizer {
+namespace {
+
+// h = 1e-6 on O(1) coordinates: truncation ~1e-12, rounding ~1e-10 (terms are O(1));
+// 1e-7 absolute leaves three digits.
+constexpr double kH = 1e-6;
+constexpr double kTol = 1e-7;
+
+struct Fixture {
+  Mechanism mech;
+  int a, b, ground;
+  Fixture() {
+    Body ba{"a"}, bb{"b"}, g{"ground"};
+    g.fixed = true;
+    ground = mech.AddBody(g);
+    a = mech.AddBody(ba);
+    b = mech.AddBody(bb);
+  }
+};
+
+Eigen::VectorXd RandomCoordinates(std::mt19937_64& rng, int n) {
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::VectorXd q(n);
+  for (int i = 0; i < n; ++i) q[i] = g(rng);
+  for (int o = 0; o < n; o += 7) q.segment<4>(o + 3) *= 1.2 / q.segment<4>(o + 3).norm();
+  return q;
+}
+
+void CheckTerm(const Fixture& f, const Term& term, std::mt19937_64& rng) {
+  for (int trial = 0; trial < 5; ++trial) {
+    const Eigen::VectorXd q = RandomCoordinates(rng, f.mech.num_coordinates());
+    std::vector<BodyPose> poses;
+    f.mech.Poses(q, &poses);
+    const int m = term.dim();
+    Eigen::VectorXd r(m);
+    Eigen::MatrixXd Ja(m, 7), Jb(m, 7);
+    term.Evaluate(poses, r, Ja, Jb);
+    ASSERT_TRUE(r.allFinite()) << term.name();
+    for (int side = 0; side < 2; ++side) {
+      const int body = side == 0 ? term.body_a() : term.body_b();
+      if (body < 0 || f.mech.offset(body) < 0) continue;
+      for (int k = 0; k < 7; ++k) {
+        Eigen::VectorXd qp = q, qm = q;
+        qp[f.mech.offset(body) + k] += kH;
+        qm[f.mech.offset(body) + k] -= kH;
+        std::vector<BodyPose> pp, pm;
+        f.mech.Poses(qp, &pp);
+        f.mech.Poses(qm, &pm);
+        Eigen::VectorXd rp(m), rm(m);
+        Eigen::MatrixXd s1(m, 7), s2(m, 7);
+        term.Evaluate(pp, rp, s1, s2);
+        term.Evaluate(pm, rm, s1, s2);
+        const Eigen::VectorXd fd = (rp - rm) / (2 * kH);
+        const Eigen::VectorXd an = side == 0 ? Ja.col(k) : Jb.col(k);
+        EXPECT_LT((fd - an).cwiseAbs().maxCoeff(), kTol)
+            << term.name() << " body " << side << " coordinate " << k;
+      }
+    }
+  }
+}
+
+TEST(TermsTest, JointJacobiansMatchFiniteDifferences) {
+  Fixture f;
+  std::mt19937_64 rng(31);
+  const Attachment a{f.a, {0.1, -0.2, 0.3}, {0.3, 0.5, -1.0}, {1, 0, 0.2}};
+  const Attachment b{f.b, {-0.3, 0.1, 0.05}, {0.0, 1.0, 0.4}, {0.2, 0.1, 1}};
+  const Attachment g{f.ground, {0.5, 0.5, 0}, {0, 0, 1}, {1, 0, 0}};
+  for (const TermPtr& t : {SphericalJoint(a, b), RevoluteJoint(a, b), UniversalJoint(a, b),
+                           CylindricalJoint(a, b), PrismaticJoint(a, b), FixedJoint(a, b),
+                           RevoluteJoint(g, b), UnitQuaternion(f.a), RevoluteLimits(a, b, -1.0, 2.0)}) {
+    CheckTerm(f, *t, rng);
+  }
+}
+
+TEST(TermsTest, GoalJacobiansMatchFiniteDifferences) {
+  Fixture f;
+  std::mt19937_64 rng(32);
+  const Attachment a{f.a, {0.1, -0.2, 0.3}, {0.3, 0.5, -1.0}, {1, 0, 0}};
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Vector3d t(0.5, -0.4, 2.0);
+  for (const TermPtr& g : {PositionGoal(a, t), OrientationGoal(f.a, R, {1.0, 0.5, 0.0}),
+                           PoseGoal(a, t, R, {1, 1, 1}), AimingGoal(a, {4, 5, 6}),
+                           LineGoal(a, t, {1, 1, 0}), PlaneGoal(a, t, {0, 0.3, 1}),
+                           HalfSpaceGoal(a, t, {0, 0.3, 1}, false),
+                           DisjunctionGoal({PositionGoal(a, t), PositionGoal(a, -t)})}) {
+    CheckTerm(f, *g, rng);
+  }
+}
+
+TEST(TermsTest, JointsVanishWhenAssembled) {
+  // Two bodies placed so the attachments agree: every joint row is zero.
+  Fixture f;
+  const Eigen::Quaterniond qa(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 0, 1).normalized()));
+  const Eigen::Vector3d pa(0.2, 0.3, -0.1);
+  const Eigen::Vector3d point_a(0.1, 0.0, 0.2), axis_a(0, 0, 1), ref_a(1, 0, 0);
+  // b's frame is a's frame shifted so that b's attachment (origin, same axes) sits on a's.
+  Eigen::VectorXd q(14);
+  q << pa, qa.w(), qa.x(), qa.y(), qa.z(), pa + qa * point_a, qa.w(), qa.x(), qa.y(), qa.z();
+  std::vector<BodyPose> poses;
+  f.mech.Poses(q, &poses);
+  const Attachment a{f.a, point_a, axis_a, ref_a};
+  const Attachment b{f.b, Eigen::Vector3d::Zero(), axis_a, ref_a};
+  for (const TermPtr& t : {SphericalJoint(a, b), RevoluteJoint(a, b), CylindricalJoint(a, b),
+                           PrismaticJoint(a, b), FixedJoint(a, b)}) {
+    Eigen::VectorXd r(t->dim());
+    Eigen::MatrixXd J1(t->dim(), 7), J2(t->dim(), 7);
+    t->Evaluate(poses, r, J1, J2);
+    EXPECT_LT(r.cwiseAbs().maxCoeff(), 1e-15) << t->name();
+  }
+}
+
+TEST(TermsTest, BadInputIsRejectedWithAMessage) {
+  Mechanism m;
+  Body bad{"wrist"};
+  bad.mass = -1;
+  try {
+    m.AddBody(bad);
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "body \"wrist\": mass must be positive and finite");
+  }
+  const Attachment a{0, {0, 0, 0}, {0, 0, 1}, {0, 0, 2}};
+  EXPECT_THROW(RevoluteJoint(a, a), std::invalid_argument);  // Reference parallel to axis.
+  EXPECT_THROW(LineGoal(a, {0, 0, 0}, {0, 0, 0}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace tangent::optimizer
