@@ -23,6 +23,23 @@ Matrix34d RotateDerivative(const Eigen::Vector4d& Q, const Eigen::Vector3d& v) {
   return RotateDerivativeUnnormalized(q_hat, v) * projector / norm;
 }
 
+Eigen::Matrix4d RotateHessian(const Eigen::Vector4d& Q, const Eigen::Vector3d& v,
+                              const Eigen::Vector3d& y) {
+  Eigen::Matrix4d A;
+  const double yv = y.dot(v);
+  const Eigen::Vector3d vy = v.cross(y);
+  A(0, 0) = yv;
+  A.block<1, 3>(0, 1) = vy.transpose();
+  A.block<3, 1>(1, 0) = vy;
+  A.block<3, 3>(1, 1) = -yv * Eigen::Matrix3d::Identity() + y * v.transpose() + v * y.transpose();
+  const double s = Q.squaredNorm();
+  const double phi = Q.dot(A * Q);
+  const Eigen::Vector4d AQ = A * Q;
+  return 2.0 * A / s - 4.0 * (AQ * Q.transpose() + Q * AQ.transpose()) / (s * s) -
+         2.0 * phi * Eigen::Matrix4d::Identity() / (s * s) +
+         8.0 * phi * Q * Q.transpose() / (s * s * s);
+}
+
 Matrix34d GBody(const Eigen::Vector4d& Q) {
   const double w = Q[0], x = Q[1], y = Q[2], z = Q[3];
   Matrix34d g;

@@ -46,6 +46,13 @@ inline Eigen::Vector3d TorqueFromQuaternionForce(const Eigen::Vector4d& Q,
   return 0.25 * GBody(Q) * W_c;
 }
 
+/// ∇²_Q [yᵀ R(Q/|Q|) v] (4 x 4): the second derivative of one world component combination of a
+/// body-fixed vector under the normalized map. With Q v Q* = φ-form Qᵀ A Q, where
+///   A = [y·v, (v×y)ᵀ; v×y, −(y·v)I + y vᵀ + v yᵀ],
+/// f(Q) = QᵀAQ / QᵀQ and ∇²f = 2A/s − 4(AQQᵀ + QQᵀA)/s² − 2φ I/s² + 8φ QQᵀ/s³, s = QᵀQ, φ = QᵀAQ.
+Eigen::Matrix4d RotateHessian(const Eigen::Vector4d& Q, const Eigen::Vector3d& v,
+                              const Eigen::Vector3d& y);
+
 /// [a]×, the cross-product matrix: [a]× b = a × b.
 inline Eigen::Matrix3d Skew(const Eigen::Vector3d& a) {
   Eigen::Matrix3d m;

@@ -10,27 +10,10 @@ namespace {
 
 using Matrix37 = Eigen::Matrix<double, 3, 7>;
 
-class Position final : public Term {
- public:
-  Position(const Attachment& at, const Eigen::Vector3d& t) : at_(at), t_(t) {}
-  std::string name() const override { return "position_goal"; }
-  int dim() const override { return 3; }
-  int body_a() const override { return at_.body; }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd>) const override {
-    const BodyPose& p = poses[static_cast<size_t>(at_.body)];
-    r = p.Point(at_.point) - t_;
-    J_a = contact::PointJacobian(p, at_.point);
-  }
-
- private:
-  Attachment at_;
-  Eigen::Vector3d t_;
-};
-
 class Orientation final : public Term {
  public:
-  Orientation(int body, const Eigen::Matrix3d& R, const Eigen::Vector3d& w) : body_(body), R_(R), w_(w) {
+  Orientation(int body, const Eigen::Matrix3d& R, const Eigen::Vector3d& w)
+      : body_(body), R_(R), w_(w) {
     if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-9) {
       throw std::invalid_argument("orientation goal: target is not a rotation matrix");
     }
@@ -45,6 +28,16 @@ class Orientation final : public Term {
       const Eigen::Vector3d e = Eigen::Vector3d::Unit(i);
       r.segment<3>(3 * i) = w_[i] * (p.R * e - R_.col(i));
       J_a.middleRows<3>(3 * i) = w_[i] * contact::DirectionJacobian(p, e);
+    }
+  }
+  bool has_hessian() const override { return true; }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+                          const Eigen::Ref<const Eigen::VectorXd>& w, Matrix7d* H_aa, Matrix7d*,
+                          Matrix7d*) const override {
+    const BodyPose& p = poses[static_cast<size_t>(body_)];
+    for (int i = 0; i < 3; ++i) {
+      H_aa->block<4, 4>(3, 3) += contact::RotateHessian(p.q.tail<4>(), Eigen::Vector3d::Unit(i),
+                                                        w_[i] * w.segment<3>(3 * i));
     }
   }
 
@@ -65,6 +58,13 @@ class Concat final : public Term {
     const int n = a_->dim();
     a_->Evaluate(poses, r.head(n), J_a.topRows(n), J_b.topRows(n));
     b_->Evaluate(poses, r.tail(b_->dim()), J_a.bottomRows(b_->dim()), J_b.bottomRows(b_->dim()));
+  }
+  bool has_hessian() const override { return a_->has_hessian() && b_->has_hessian(); }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+                          const Eigen::Ref<const Eigen::VectorXd>& w, Matrix7d* H_aa,
+                          Matrix7d* H_ab, Matrix7d* H_bb) const override {
+    a_->AddWeightedHessian(poses, w.head(a_->dim()), H_aa, H_ab, H_bb);
+    b_->AddWeightedHessian(poses, w.tail(b_->dim()), H_aa, H_ab, H_bb);
   }
 
  private:
@@ -98,7 +98,9 @@ class Aiming final : public Term {
 class Line final : public Term {
  public:
   Line(const Attachment& at, const Eigen::Vector3d& o, const Eigen::Vector3d& d)
-      : at_(at), o_(o), P_(Eigen::Matrix3d::Identity() - d.normalized() * d.normalized().transpose()) {}
+      : at_(at),
+        o_(o),
+        P_(Eigen::Matrix3d::Identity() - d.normalized() * d.normalized().transpose()) {}
   std::string name() const override { return "line_goal"; }
   int dim() const override { return 3; }
   int body_a() const override { return at_.body; }
@@ -107,6 +109,13 @@ class Line final : public Term {
     const BodyPose& p = poses[static_cast<size_t>(at_.body)];
     r = P_ * (p.Point(at_.point) - o_);
     J_a = P_ * contact::PointJacobian(p, at_.point);
+  }
+  bool has_hessian() const override { return true; }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+                          const Eigen::Ref<const Eigen::VectorXd>& w, Matrix7d* H_aa, Matrix7d*,
+                          Matrix7d*) const override {
+    const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+    H_aa->block<4, 4>(3, 3) += contact::RotateHessian(p.q.tail<4>(), at_.point, P_ * w.head<3>());
   }
 
  private:
@@ -117,7 +126,8 @@ class Line final : public Term {
 
 class Plane final : public Term {
  public:
-  Plane(const Attachment& at, const Eigen::Vector3d& o, const Eigen::Vector3d& n, bool half, bool one_sided)
+  Plane(const Attachment& at, const Eigen::Vector3d& o, const Eigen::Vector3d& n, bool half,
+        bool one_sided)
       : at_(at), o_(o), n_(n.normalized()), half_(half), one_sided_(one_sided) {}
   std::string name() const override { return half_ ? "half_space_goal" : "plane_goal"; }
   int dim() const override { return 1; }
@@ -133,6 +143,14 @@ class Plane final : public Term {
     }
     r[0] = s;
     J_a = n_.transpose() * contact::PointJacobian(p, at_.point);
+  }
+  bool has_hessian() const override { return true; }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+                          const Eigen::Ref<const Eigen::VectorXd>& w, Matrix7d* H_aa, Matrix7d*,
+                          Matrix7d*) const override {
+    const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+    if (one_sided_ && n_.dot(p.Point(at_.point) - o_) > 0) return;
+    H_aa->block<4, 4>(3, 3) += contact::RotateHessian(p.q.tail<4>(), at_.point, w[0] * n_);
   }
 
  private:
@@ -192,8 +210,26 @@ class Disjunction final : public Term {
 
 }  // namespace
 
+void PositionGoalTerm::Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                                Eigen::Ref<Eigen::MatrixXd> J_a,
+                                Eigen::Ref<Eigen::MatrixXd>) const {
+  const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+  r = p.Point(at_.point) - target_;
+  J_a = contact::PointJacobian(p, at_.point);
+}
+
+void PositionGoalTerm::AddWeightedHessian(const std::vector<BodyPose>& poses,
+                                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                                          Matrix7d* H_aa, Matrix7d*, Matrix7d*) const {
+  const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+  H_aa->block<4, 4>(3, 3) += contact::RotateHessian(p.q.tail<4>(), at_.point, w.head<3>());
+}
+
+std::shared_ptr<PositionGoalTerm> MakePositionGoal(const Attachment& at, const Eigen::Vector3d& t) {
+  return std::make_shared<PositionGoalTerm>(at, t);
+}
 TermPtr PositionGoal(const Attachment& at, const Eigen::Vector3d& t) {
-  return std::make_shared<Position>(at, t);
+  return MakePositionGoal(at, t);
 }
 TermPtr OrientationGoal(int body, const Eigen::Matrix3d& R, const Eigen::Vector3d& w) {
   return std::make_shared<Orientation>(body, R, w);

@@ -9,7 +9,29 @@
 namespace tangent::optimizer {
 
 /// Goals of seed 002 §5 as terms: usable as weighted objectives (½ w |r|²) or hard constraints.
-/// Position: P − target (3 rows).
+/// Position: P − target (3 rows). The target moves with set_target (each servo tick: the hand).
+class PositionGoalTerm final : public Term {
+ public:
+  PositionGoalTerm(const Attachment& at, const Eigen::Vector3d& target_W)
+      : at_(at), target_(target_W) {}
+  void set_target(const Eigen::Vector3d& target_W) { target_ = target_W; }
+  const Eigen::Vector3d& target() const { return target_; }
+  std::string name() const override { return "position_goal"; }
+  int dim() const override { return 3; }
+  int body_a() const override { return at_.body; }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
+  bool has_hessian() const override { return true; }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+                          const Eigen::Ref<const Eigen::VectorXd>& w, Matrix7d* H_aa,
+                          Matrix7d* H_ab, Matrix7d* H_bb) const override;
+
+ private:
+  Attachment at_;
+  Eigen::Vector3d target_;
+};
+std::shared_ptr<PositionGoalTerm> MakePositionGoal(const Attachment& at,
+                                                   const Eigen::Vector3d& target_W);
 TermPtr PositionGoal(const Attachment& at, const Eigen::Vector3d& target_W);
 /// Orientation with per-axis weights: w_i (R e_i − R_target e_i), i = x, y, z (9 rows; a zero
 /// weight frees rotation that moves that axis only through the others).
@@ -21,9 +43,11 @@ TermPtr PoseGoal(const Attachment& at, const Eigen::Vector3d& target_W,
 /// R axis − (target − P)/|target − P| (3 rows).
 TermPtr AimingGoal(const Attachment& at, const Eigen::Vector3d& target_W);
 /// Line: P on the line through `origin` along `direction`: (I − d dᵀ)(P − origin) (3 rows).
-TermPtr LineGoal(const Attachment& at, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction);
+TermPtr LineGoal(const Attachment& at, const Eigen::Vector3d& origin,
+                 const Eigen::Vector3d& direction);
 /// Plane: n·(P − origin) (1 row).
-TermPtr PlaneGoal(const Attachment& at, const Eigen::Vector3d& origin, const Eigen::Vector3d& normal);
+TermPtr PlaneGoal(const Attachment& at, const Eigen::Vector3d& origin,
+                  const Eigen::Vector3d& normal);
 /// Half-space n·(P − origin) ≥ 0. As a constraint the row is n·(P − origin); as an objective
 /// the residual is min(0, n·(P − origin)) (one-sided), so it only acts when violated.
 TermPtr HalfSpaceGoal(const Attachment& at, const Eigen::Vector3d& origin,

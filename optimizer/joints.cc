@@ -29,18 +29,22 @@ Eigen::Vector3d Direction(const std::vector<BodyPose>& poses, int body, const Ei
 // Two unit vectors perpendicular to a (and to each other).
 void Perpendiculars(const Eigen::Vector3d& a, Eigen::Vector3d* e1, Eigen::Vector3d* e2) {
   const Eigen::Vector3d n = a.normalized();
-  *e1 = (std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(n).normalized();
+  *e1 = (std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY())
+            .cross(n)
+            .normalized();
   *e2 = n.cross(*e1);
 }
 
 Attachment Normalized(Attachment at, const char* joint) {
   if (!(at.axis.norm() > 0) || !(at.reference.norm() > 0)) {
-    throw std::invalid_argument(std::string(joint) + ": attachment axis and reference must be non-zero");
+    throw std::invalid_argument(std::string(joint) +
+                                ": attachment axis and reference must be non-zero");
   }
   at.axis.normalize();
   at.reference = (at.reference - at.axis * at.axis.dot(at.reference));
   if (!(at.reference.norm() > 1e-9)) {
-    throw std::invalid_argument(std::string(joint) + ": attachment reference is parallel to its axis");
+    throw std::invalid_argument(std::string(joint) +
+                                ": attachment reference is parallel to its axis");
   }
   at.reference.normalize();
   return at;
@@ -83,6 +87,54 @@ struct Rows {
   }
 };
 
+// The same rows' weighted second derivatives (weights w, one per row, consumed in order).
+struct HessianRows {
+  const Eigen::Ref<const Eigen::VectorXd>& w;
+  Term::Matrix7d* Haa;
+  Term::Matrix7d* Hab;
+  Term::Matrix7d* Hbb;
+  int row = 0;
+
+  static Eigen::Vector4d Q(const std::vector<BodyPose>& poses, int body) {
+    return poses[static_cast<size_t>(body)].q.tail<4>();
+  }
+  // Σ w_k (P_a − P_b)_k: only the rotations curve.
+  void Coincide(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b) {
+    const Eigen::Vector3d y = w.segment<3>(row);
+    Haa->block<4, 4>(3, 3) += contact::RotateHessian(Q(poses, a.body), a.point, y);
+    Hbb->block<4, 4>(3, 3) -= contact::RotateHessian(Q(poses, b.body), b.point, y);
+    row += 3;
+  }
+  // w (R_a u)·(R_b v).
+  void Dot(const std::vector<BodyPose>& poses, int ba, const Eigen::Vector3d& u, int bb,
+           const Eigen::Vector3d& v) {
+    const double wk = w[row++];
+    const BodyPose& pa = poses[static_cast<size_t>(ba)];
+    const BodyPose& pb = poses[static_cast<size_t>(bb)];
+    Haa->block<4, 4>(3, 3) += contact::RotateHessian(pa.q.tail<4>(), u, wk * (pb.R * v));
+    Hbb->block<4, 4>(3, 3) += contact::RotateHessian(pb.q.tail<4>(), v, wk * (pa.R * u));
+    Hab->block<4, 4>(3, 3) += wk * contact::RotateDerivative(pa.q.tail<4>(), u).transpose() *
+                              contact::RotateDerivative(pb.q.tail<4>(), v);
+  }
+  // w (P_b − P_a)·E_a with E_a = R_a e.
+  void Offset(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b,
+              const Eigen::Vector3d& e) {
+    const double wk = w[row++];
+    const BodyPose& pa = poses[static_cast<size_t>(a.body)];
+    const BodyPose& pb = poses[static_cast<size_t>(b.body)];
+    const Eigen::Vector3d d = pb.Point(b.point) - pa.Point(a.point);
+    const Eigen::Vector3d E = pa.R * e;
+    const Matrix37 JPa = contact::PointJacobian(pa, a.point);
+    const Matrix37 JPb = contact::PointJacobian(pb, b.point);
+    const Matrix37 JE = contact::DirectionJacobian(pa, e);
+    *Haa -= wk * (JE.transpose() * JPa + JPa.transpose() * JE);
+    Haa->block<4, 4>(3, 3) += contact::RotateHessian(pa.q.tail<4>(), e, wk * d) -
+                              contact::RotateHessian(pa.q.tail<4>(), a.point, wk * E);
+    *Hab += wk * JE.transpose() * JPb;
+    Hbb->block<4, 4>(3, 3) += contact::RotateHessian(pb.q.tail<4>(), b.point, wk * E);
+  }
+};
+
 enum class Kind { kSpherical, kRevolute, kUniversal, kCylindrical, kPrismatic, kFixed };
 
 class Joint final : public Term {
@@ -95,12 +147,18 @@ class Joint final : public Term {
   std::string name() const override { return name_; }
   int dim() const override {
     switch (kind_) {
-      case Kind::kSpherical: return 3;
-      case Kind::kRevolute: return 5;
-      case Kind::kUniversal: return 4;
-      case Kind::kCylindrical: return 4;
-      case Kind::kPrismatic: return 5;
-      case Kind::kFixed: return 6;
+      case Kind::kSpherical:
+        return 3;
+      case Kind::kRevolute:
+        return 5;
+      case Kind::kUniversal:
+        return 4;
+      case Kind::kCylindrical:
+        return 4;
+      case Kind::kPrismatic:
+        return 5;
+      case Kind::kFixed:
+        return 6;
     }
     return 0;
   }
@@ -109,26 +167,38 @@ class Joint final : public Term {
   void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
                 Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override {
     Rows rows{r, J_a, J_b};
-    const bool coincide = kind_ == Kind::kSpherical || kind_ == Kind::kRevolute ||
-                          kind_ == Kind::kUniversal || kind_ == Kind::kFixed;
-    if (coincide) rows.Coincide(poses, a_, b_);
-    if (kind_ == Kind::kUniversal) rows.Dot(poses, a_.body, a_.axis, b_.body, b_.axis);
-    const bool parallel = kind_ == Kind::kRevolute || kind_ == Kind::kCylindrical ||
-                          kind_ == Kind::kPrismatic || kind_ == Kind::kFixed;
-    if (parallel) {  // a's axis against two directions perpendicular to b's axis.
-      rows.Dot(poses, a_.body, a_.axis, b_.body, b1_);
-      rows.Dot(poses, a_.body, a_.axis, b_.body, b2_);
-    }
-    if (kind_ == Kind::kCylindrical || kind_ == Kind::kPrismatic) {  // b's point on a's axis.
-      rows.Offset(poses, a_, b_, a1_);
-      rows.Offset(poses, a_, b_, a2_);
-    }
-    if (kind_ == Kind::kPrismatic || kind_ == Kind::kFixed) {  // No turn about the axis.
-      rows.Dot(poses, a_.body, a_.reference, b_.body, b_.axis.cross(b_.reference));
-    }
+    Visit(poses, &rows);
+  }
+  bool has_hessian() const override { return true; }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+                          const Eigen::Ref<const Eigen::VectorXd>& w, Matrix7d* H_aa,
+                          Matrix7d* H_ab, Matrix7d* H_bb) const override {
+    HessianRows rows{w, H_aa, H_ab, H_bb};
+    Visit(poses, &rows);
   }
 
  private:
+  // The joint's rows, in order, for a value/Jacobian or a Hessian visitor.
+  template <class V>
+  void Visit(const std::vector<BodyPose>& poses, V* rows) const {
+    const bool coincide = kind_ == Kind::kSpherical || kind_ == Kind::kRevolute ||
+                          kind_ == Kind::kUniversal || kind_ == Kind::kFixed;
+    if (coincide) rows->Coincide(poses, a_, b_);
+    if (kind_ == Kind::kUniversal) rows->Dot(poses, a_.body, a_.axis, b_.body, b_.axis);
+    const bool parallel = kind_ == Kind::kRevolute || kind_ == Kind::kCylindrical ||
+                          kind_ == Kind::kPrismatic || kind_ == Kind::kFixed;
+    if (parallel) {  // a's axis against two directions perpendicular to b's axis.
+      rows->Dot(poses, a_.body, a_.axis, b_.body, b1_);
+      rows->Dot(poses, a_.body, a_.axis, b_.body, b2_);
+    }
+    if (kind_ == Kind::kCylindrical || kind_ == Kind::kPrismatic) {  // b's point on a's axis.
+      rows->Offset(poses, a_, b_, a1_);
+      rows->Offset(poses, a_, b_, a2_);
+    }
+    if (kind_ == Kind::kPrismatic || kind_ == Kind::kFixed) {  // No turn about the axis.
+      rows->Dot(poses, a_.body, a_.reference, b_.body, b_.axis.cross(b_.reference));
+    }
+  }
   Kind kind_;
   const char* name_;
   Attachment a_, b_;
@@ -148,6 +218,11 @@ class UnitQuaternionTerm final : public Term {
     J_a.setZero();
     J_a.block<1, 4>(0, 3) = 2.0 * Q.transpose();
   }
+  bool has_hessian() const override { return true; }
+  void AddWeightedHessian(const std::vector<BodyPose>&, const Eigen::Ref<const Eigen::VectorXd>& w,
+                          Matrix7d* H_aa, Matrix7d*, Matrix7d*) const override {
+    H_aa->block<4, 4>(3, 3) += 2.0 * w[0] * Eigen::Matrix4d::Identity();
+  }
 
  private:
   int body_;
@@ -164,7 +239,8 @@ double Angle(const std::vector<BodyPose>& poses, const Attachment& a, const Atta
   const double c = ra.dot(rb);
   if (dJa) {
     // ds = (dra × rb)·ax + (ra × drb)·ax + (ra × rb)·dax = (rb × ax)·dra + (ax × ra)·drb + ...
-    const Eigen::Matrix<double, 1, 7> ds_a = rb.cross(ax).transpose() * jra + ra.cross(rb).transpose() * jax;
+    const Eigen::Matrix<double, 1, 7> ds_a =
+        rb.cross(ax).transpose() * jra + ra.cross(rb).transpose() * jax;
     const Eigen::Matrix<double, 1, 7> ds_b = ax.cross(ra).transpose() * jrb;
     const Eigen::Matrix<double, 1, 7> dc_a = rb.transpose() * jra;
     const Eigen::Matrix<double, 1, 7> dc_b = ra.transpose() * jrb;
@@ -178,7 +254,10 @@ double Angle(const std::vector<BodyPose>& poses, const Attachment& a, const Atta
 class RevoluteLimitsTerm final : public Term {
  public:
   RevoluteLimitsTerm(const Attachment& a, const Attachment& b, double lo, double hi)
-      : a_(Normalized(a, "revolute limits")), b_(Normalized(b, "revolute limits")), lo_(lo), hi_(hi) {
+      : a_(Normalized(a, "revolute limits")),
+        b_(Normalized(b, "revolute limits")),
+        lo_(lo),
+        hi_(hi) {
     if (!(lo < hi)) throw std::invalid_argument("revolute limits: need lo < hi");
   }
   std::string name() const override { return "revolute_limits"; }
@@ -227,7 +306,8 @@ TermPtr RevoluteLimits(const Attachment& a, const Attachment& b, double lo, doub
   return std::make_shared<RevoluteLimitsTerm>(a, b, lo, hi);
 }
 double RevoluteAngle(const Attachment& a, const Attachment& b, const std::vector<BodyPose>& poses) {
-  return Angle(poses, Normalized(a, "revolute angle"), Normalized(b, "revolute angle"), nullptr, nullptr);
+  return Angle(poses, Normalized(a, "revolute angle"), Normalized(b, "revolute angle"), nullptr,
+               nullptr);
 }
 
 }  // namespace tangent::optimizer

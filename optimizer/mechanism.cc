@@ -15,7 +15,8 @@ int Mechanism::AddBody(Body body) {
   if (!(body.pose.tail<4>().norm() > 0.0)) fail("quaternion is zero");
   if (!body.fixed) {
     if (!(body.mass > 0.0) || !std::isfinite(body.mass)) fail("mass must be positive and finite");
-    if (!body.inertia.allFinite() || (body.inertia - body.inertia.transpose()).norm() > 1e-12 * body.inertia.norm()) {
+    if (!body.inertia.allFinite() ||
+        (body.inertia - body.inertia.transpose()).norm() > 1e-12 * body.inertia.norm()) {
       fail("inertia must be finite and symmetric");
     }
     if (!(body.rigidity >= 0.0)) fail("rigidity must be non-negative");

@@ -19,8 +19,8 @@ struct Body {
   std::string name;
   bool fixed = false;
   Vector7d pose = (Vector7d() << 0, 0, 0, 1, 0, 0, 0).finished();  ///< initial or fixed pose
-  double mass = 1.0;                                                ///< kg
-  Eigen::Matrix3d inertia = Eigen::Matrix3d::Identity() * 1e-3;     ///< kg m², frame B
+  double mass = 1.0;                                               ///< kg
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Identity() * 1e-3;    ///< kg m², frame B
   double rigidity = 1.0;  ///< multiplies the body's block of the metric (≥ 0)
 };
 

@@ -59,6 +59,23 @@ TEST(RigidTest, NormalizedRotateDerivativeMatchesFiniteDifferencesAndRigidForm) 
   }
 }
 
+TEST(RigidTest, RotateHessianMatchesFiniteDifferences) {
+  std::mt19937_64 rng(4);
+  for (int k = 0; k < 10; ++k) {
+    const Eigen::Vector4d Q = 0.8 * RandomUnitQuaternion(rng);  // Off the unit sphere too.
+    const Eigen::Vector3d v = Eigen::Vector3d::Random(), y = Eigen::Vector3d::Random();
+    const Eigen::Matrix4d H = RotateHessian(Q, v, y);
+    for (int i = 0; i < 4; ++i) {
+      const Eigen::Vector4d e = Eigen::Vector4d::Unit(i) * kH;
+      const Eigen::Vector4d fd =
+          (y.transpose() * RotateDerivative(Q + e, v) - y.transpose() * RotateDerivative(Q - e, v))
+              .transpose() /
+          (2 * kH);
+      EXPECT_LT((H.col(i) - fd).norm(), kTol);
+    }
+  }
+}
+
 TEST(RigidTest, GBodyGivesBodyAngularVelocityAndTorqueMapConservesPower) {
   std::mt19937_64 rng(3);
   for (int k = 0; k < 20; ++k) {

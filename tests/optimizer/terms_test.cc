@@ -70,16 +70,72 @@ void CheckTerm(const Fixture& f, const Term& term, std::mt19937_64& rng) {
   }
 }
 
+// Σ w_i ∇²r_i against finite differences of the weighted gradient Jᵀw over both bodies.
+void CheckHessian(const Fixture& f, const Term& term, std::mt19937_64& rng) {
+  if (!term.has_hessian()) return;
+  std::normal_distribution<double> g(0.0, 1.0);
+  const int m = term.dim();
+  for (int trial = 0; trial < 3; ++trial) {
+    const Eigen::VectorXd q = RandomCoordinates(rng, f.mech.num_coordinates());
+    Eigen::VectorXd w(m);
+    for (int i = 0; i < m; ++i) w[i] = g(rng);
+    std::vector<BodyPose> poses;
+    f.mech.Poses(q, &poses);
+    Term::Matrix7d Haa = Term::Matrix7d::Zero(), Hab = Term::Matrix7d::Zero(),
+                   Hbb = Term::Matrix7d::Zero();
+    term.AddWeightedHessian(poses, w, &Haa, &Hab, &Hbb);
+    auto weighted_gradient = [&](const Eigen::VectorXd& x, Eigen::Matrix<double, 7, 1>* ga,
+                                 Eigen::Matrix<double, 7, 1>* gb) {
+      std::vector<BodyPose> p;
+      f.mech.Poses(x, &p);
+      Eigen::VectorXd r(m);
+      Eigen::MatrixXd Ja(m, 7), Jb(m, 7);
+      term.Evaluate(p, r, Ja, Jb);
+      *ga = Ja.transpose() * w;
+      *gb = Jb.transpose() * w;
+    };
+    for (int side = 0; side < 2; ++side) {
+      const int body = side == 0 ? term.body_a() : term.body_b();
+      if (body < 0 || f.mech.offset(body) < 0) continue;
+      for (int k = 0; k < 7; ++k) {
+        Eigen::VectorXd qp = q, qm = q;
+        qp[f.mech.offset(body) + k] += kH;
+        qm[f.mech.offset(body) + k] -= kH;
+        Eigen::Matrix<double, 7, 1> gap, gbp, gam, gbm;
+        weighted_gradient(qp, &gap, &gbp);
+        weighted_gradient(qm, &gam, &gbm);
+        const Eigen::Matrix<double, 7, 1> dga = (gap - gam) / (2 * kH),
+                                          dgb = (gbp - gbm) / (2 * kH);
+        // Column k of ∂g_a/∂q_side and ∂g_b/∂q_side.
+        const Eigen::Matrix<double, 7, 1> an_a = side == 0
+                                                     ? Eigen::Matrix<double, 7, 1>(Haa.col(k))
+                                                     : Eigen::Matrix<double, 7, 1>(Hab.col(k));
+        const Eigen::Matrix<double, 7, 1> an_b =
+            side == 0 ? Eigen::Matrix<double, 7, 1>(Hab.row(k).transpose())
+                      : Eigen::Matrix<double, 7, 1>(Hbb.col(k));
+        EXPECT_LT((dga - an_a).cwiseAbs().maxCoeff(), 1e-6)
+            << term.name() << " H_a* side " << side << " k " << k;
+        if (term.body_b() >= 0 && f.mech.offset(term.body_b()) >= 0) {
+          EXPECT_LT((dgb - an_b).cwiseAbs().maxCoeff(), 1e-6)
+              << term.name() << " H_b* side " << side << " k " << k;
+        }
+      }
+    }
+  }
+}
+
 TEST(TermsTest, JointJacobiansMatchFiniteDifferences) {
   Fixture f;
   std::mt19937_64 rng(31);
   const Attachment a{f.a, {0.1, -0.2, 0.3}, {0.3, 0.5, -1.0}, {1, 0, 0.2}};
   const Attachment b{f.b, {-0.3, 0.1, 0.05}, {0.0, 1.0, 0.4}, {0.2, 0.1, 1}};
   const Attachment g{f.ground, {0.5, 0.5, 0}, {0, 0, 1}, {1, 0, 0}};
-  for (const TermPtr& t : {SphericalJoint(a, b), RevoluteJoint(a, b), UniversalJoint(a, b),
-                           CylindricalJoint(a, b), PrismaticJoint(a, b), FixedJoint(a, b),
-                           RevoluteJoint(g, b), UnitQuaternion(f.a), RevoluteLimits(a, b, -1.0, 2.0)}) {
+  for (const TermPtr& t :
+       {SphericalJoint(a, b), RevoluteJoint(a, b), UniversalJoint(a, b), CylindricalJoint(a, b),
+        PrismaticJoint(a, b), FixedJoint(a, b), RevoluteJoint(g, b), UnitQuaternion(f.a),
+        RevoluteLimits(a, b, -1.0, 2.0)}) {
     CheckTerm(f, *t, rng);
+    CheckHessian(f, *t, rng);
   }
 }
 
@@ -87,14 +143,16 @@ TEST(TermsTest, GoalJacobiansMatchFiniteDifferences) {
   Fixture f;
   std::mt19937_64 rng(32);
   const Attachment a{f.a, {0.1, -0.2, 0.3}, {0.3, 0.5, -1.0}, {1, 0, 0}};
-  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   const Eigen::Vector3d t(0.5, -0.4, 2.0);
-  for (const TermPtr& g : {PositionGoal(a, t), OrientationGoal(f.a, R, {1.0, 0.5, 0.0}),
-                           PoseGoal(a, t, R, {1, 1, 1}), AimingGoal(a, {4, 5, 6}),
-                           LineGoal(a, t, {1, 1, 0}), PlaneGoal(a, t, {0, 0.3, 1}),
-                           HalfSpaceGoal(a, t, {0, 0.3, 1}, false),
-                           DisjunctionGoal({PositionGoal(a, t), PositionGoal(a, -t)})}) {
+  for (const TermPtr& g :
+       {PositionGoal(a, t), OrientationGoal(f.a, R, {1.0, 0.5, 0.0}), PoseGoal(a, t, R, {1, 1, 1}),
+        AimingGoal(a, {4, 5, 6}), LineGoal(a, t, {1, 1, 0}), PlaneGoal(a, t, {0, 0.3, 1}),
+        HalfSpaceGoal(a, t, {0, 0.3, 1}, false),
+        DisjunctionGoal({PositionGoal(a, t), PositionGoal(a, -t)})}) {
     CheckTerm(f, *g, rng);
+    CheckHessian(f, *g, rng);
   }
 }
 

@@ -1,0 +1,78 @@
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include "optimizer/problem.h"
+
+namespace tangent::optimizer {
+
+struct SolverOptions {
+  int max_iterations = 60;  ///< Gauss–Newton steps (multiplier updates are not counted)
+  /// Wall-clock budget per Solve in microseconds (0: none). The best iterate is returned.
+  double time_budget_us = 0.0;
+  double constraint_tolerance = 1e-10;  ///< max |c_E|, max(0, −c_I), in the terms' units
+  double kkt_tolerance = 1e-8;          ///< |∇E − J_Eᵀλ_E − J_Iᵀλ_I|∞
+  /// μ of the augmented Lagrangian: the weight of the constraints in the Newton matrix and the
+  /// inverse of the regularization of the multiplier block. Large enough that the constraints
+  /// dominate (joint rows are O(1)), small enough that μJᵀJ leaves the objective's digits.
+  double penalty = 1e6;
+  /// Levenberg–Marquardt damping added to the Gauss–Newton matrix, relative to its diagonal.
+  double damping = 1e-12;
+};
+
+struct SolveStats {
+  int iterations = 0;
+  double max_violation = 0.0;
+  double kkt_residual = 0.0;
+  double objective = 0.0;
+  double penalty = 0.0;
+  bool converged = false;
+  bool budget_exhausted = false;
+};
+
+/// Augmented Lagrangian with the PHR form for inequalities (design.md §4.5), in its primal-dual
+/// (stabilized SQP) form: each iteration is a Newton step on the KKT conditions
+///   ∇E − J_Eᵀλ_E − J_Iᵀλ_I = 0,   c_E + (λ_E − λ̄_E)/μ = 0,   and the PHR-shifted inequalities,
+/// with λ̄ the current multipliers. Eliminating the multiplier step leaves the dense n x n system
+///   (∇²E − Σλ_i∇²c_i + μ J_EᵀJ_E + μ J_AᵀJ_A) Δq = −(∇E − J_Eᵀ(λ_E − μc_E) − J_Iᵀ max(0, λ_I −
+///   μc_I))
+/// (LDLᵀ; A the inequality rows with positive shifted multiplier), then λ ← λ − μ(c + JΔq) from the
+/// linearized constraints. The curvature is exact where terms provide second derivatives
+/// (Term::AddWeightedHessian), Gauss–Newton otherwise; Levenberg damping makes the matrix positive
+/// definite where it is not; a step is halved while it would raise the violation tenfold.
+/// Near a warm start this is Newton's method on the KKT system (quadratic convergence), and the
+/// 1/μ block keeps redundant constraints regular. Quaternions are renormalized after each step
+/// (the geometry ignores |Q|). Multipliers persist between Solve calls (warm start). All storage
+/// is sized at construction: Solve allocates nothing.
+class Solver {
+ public:
+  explicit Solver(const Problem& problem, const SolverOptions& options = {});
+  /// Solves from *q (the previous tick's solution, also least astonishment's q_prev).
+  SolveStats Solve(Eigen::VectorXd* q);
+  /// Forgets multipliers and penalty (after the constraint set or the goals jump).
+  void Reset();
+  const Eigen::VectorXd& equality_multipliers() const { return lambda_e_; }
+  const Eigen::VectorXd& inequality_multipliers() const { return lambda_i_; }
+
+ private:
+  void Evaluate(const Eigen::VectorXd& q);
+  void Gradient(const Eigen::VectorXd& q, bool with_matrix);
+  void AddCurvature(const std::vector<Problem::Entry>& list, const Eigen::VectorXd& weights);
+  double Violation() const;
+  void Normalize(Eigen::VectorXd* q) const;
+
+  const Problem& problem_;
+  SolverOptions options_;
+  int n_ = 0;
+  std::vector<BodyPose> poses_;
+  Eigen::VectorXd q_prev_, c_e_, c_i_, r_o_, lambda_e_, lambda_i_, g_, step_, q_try_, shifted_;
+  Eigen::MatrixXd J_e_, J_i_, J_o_, M_, H_;
+  Eigen::VectorXd weights_, kkt_, linearized_e_,
+      linearized_i_;  // per-term row weights for the second-derivative terms
+  Eigen::MatrixXd scratch_a_, scratch_b_;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt_;
+  double mu_ = 0.0;
+};
+
+}  // namespace tangent::optimizer
