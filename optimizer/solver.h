@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include "optimizer/evaluator.h"
 #include "optimizer/problem.h"
 
 namespace tangent::optimizer {
@@ -56,21 +57,18 @@ class Solver {
   const Eigen::VectorXd& inequality_multipliers() const { return lambda_i_; }
 
  private:
-  void Evaluate(const Eigen::VectorXd& q);
   void Gradient(const Eigen::VectorXd& q, bool with_matrix);
-  void AddCurvature(const std::vector<Problem::Entry>& list, const Eigen::VectorXd& weights);
   double Violation() const;
   void Normalize(Eigen::VectorXd* q) const;
 
   const Problem& problem_;
   SolverOptions options_;
   int n_ = 0;
-  std::vector<BodyPose> poses_;
-  Eigen::VectorXd q_prev_, c_e_, c_i_, r_o_, lambda_e_, lambda_i_, g_, step_, q_try_, shifted_;
-  Eigen::MatrixXd J_e_, J_i_, J_o_, M_, H_;
+  ProblemEvaluator ev_;
+  Eigen::VectorXd q_prev_, lambda_e_, lambda_i_, g_, step_, q_try_, shifted_;
+  Eigen::MatrixXd M_, H_;
   Eigen::VectorXd weights_, kkt_, linearized_e_,
       linearized_i_;  // per-term row weights for the second-derivative terms
-  Eigen::MatrixXd scratch_a_, scratch_b_;
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   double mu_ = 0.0;
 };
