@@ -17,10 +17,13 @@ Matrix34d RotateDerivativeUnnormalized(const Eigen::Vector4d& Q, const Eigen::Ve
 }
 
 Matrix34d RotateDerivative(const Eigen::Vector4d& Q, const Eigen::Vector3d& v) {
-  const double norm = Q.norm();
-  const Eigen::Vector4d q_hat = Q / norm;
-  const Eigen::Matrix4d projector = Eigen::Matrix4d::Identity() - q_hat * q_hat.transpose();
-  return RotateDerivativeUnnormalized(q_hat, v) * projector / norm;
+  // D(Q̂, v)(I − Q̂Q̂ᵀ)/|Q| = (D − 2 (R v) Q̂ᵀ)/|Q|, because D(Q̂, v) Q̂ = 2 Q̂vQ̂* = 2 R v
+  // (the product is homogeneous of degree 2): no 4 x 4 projector product.
+  const double inv = 1.0 / Q.norm();
+  const Eigen::Vector4d q_hat = Q * inv;
+  const Matrix34d d = RotateDerivativeUnnormalized(q_hat, v);
+  const Eigen::Vector3d rv = 0.5 * (d * q_hat);
+  return (d - 2.0 * rv * q_hat.transpose()) * inv;
 }
 
 Eigen::Matrix4d RotateHessian(const Eigen::Vector4d& Q, const Eigen::Vector3d& v,

@@ -27,7 +27,7 @@ struct SolveStats {
   double max_violation = 0.0;
   double kkt_residual = 0.0;
   double objective = 0.0;
-  double penalty = 0.0;
+  double penalty = 1e6;
   bool converged = false;
   bool budget_exhausted = false;
 };

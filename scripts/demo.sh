@@ -16,3 +16,6 @@ bash scripts/build.sh
 ./build/bench/contact_bench --benchmark_min_time=0.1 --benchmark_repetitions=3 \
   --benchmark_report_aggregates_only=true --benchmark_out=build/contact_bench.json \
   --benchmark_out_format=json
+# The optimizer on the four-bar against IPOPT and NLopt SLSQP (identical problem and starts).
+./build/bench/optimizer_bench --benchmark_min_time=0.1 --benchmark_out=build/optimizer_bench.json \
+  --benchmark_out_format=json
