@@ -40,6 +40,9 @@ void Solver::Gradient(const Eigen::VectorXd& q, bool with_matrix) {
       const auto J = ev_.J_o().middleRows(o.row, o.term->dim());
       H_.noalias() += o.weight * (J.transpose() * J);
     }
+    // The objective's share of the Newton matrix, for the damping's scale (1e-300: an empty
+    // objective).
+    objective_scale_ = H_.diagonal().cwiseAbs().maxCoeff() + 1e-300;
   }
   g_.noalias() -= ev_.J_e().transpose() * (lambda_e_ - mu_ * ev_.c_e());
   if (with_matrix) H_.noalias() += mu_ * (ev_.J_e().transpose() * ev_.J_e());
@@ -103,6 +106,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
       break;
     }
     Gradient(q, /*with_matrix=*/true);
+    const double objective_scale = objective_scale_;
     // Curvature of the Lagrangian: objectives weighted by w r, equalities by −λ_E, active
     // inequalities by −λ_I (rows with a positive shifted multiplier).
     for (const Problem::Entry& o : problem_.objectives()) {
@@ -114,14 +118,17 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     for (int i = 0; i < ev_.c_i().size(); ++i)
       weights_[i] = shifted_[i] > 0.0 ? -lambda_i_[i] : 0.0;
     ev_.AddCurvature(problem_.inequalities(), weights_, &H_);
-    // Levenberg damping until positive definite (the Lagrangian's curvature may not be).
-    const double diag = H_.diagonal().cwiseAbs().maxCoeff() + 1e-300;
-    double lm = options_.damping * diag;
+    // Levenberg damping until positive definite (the Lagrangian's curvature may not be). Its
+    // scale is the objective's part of the matrix, not μJᵀJ's: the curvature along a
+    // mechanism's free motions is of the objective's size, and damping sized by μ|J|² (here
+    // 1e6 larger) would shorten every Newton step (measured: half the step, 4.5 iterations
+    // per warm solve instead of 3).
+    double lm = options_.damping * objective_scale;
     H_.diagonal().array() += lm;
-    for (int attempt = 0; attempt < 12; ++attempt) {
+    for (int attempt = 0; attempt < 16; ++attempt) {
       ldlt_.compute(H_);
       if (ldlt_.info() == Eigen::Success && (ldlt_.vectorD().array() > 0.0).all()) break;
-      const double more = std::max(1e-8 * diag, 10 * lm);
+      const double more = std::max(1e-8 * objective_scale, 10 * lm);
       H_.diagonal().array() += more - lm;
       lm = more;
     }
@@ -141,8 +148,9 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     }
     // Multipliers from the linearized constraints at the step taken.
     lambda_e_ -= mu_ * linearized_e_;
-    for (int i = 0; i < ev_.c_i().size(); ++i)
+    for (int i = 0; i < ev_.c_i().size(); ++i) {
       lambda_i_[i] = std::max(0.0, lambda_i_[i] - mu_ * linearized_i_[i]);
+    }
     q = q_try_;
   }
   st.objective = ev_.Objective(q, q_prev_, M_);

@@ -18,7 +18,8 @@ struct SolverOptions {
   /// inverse of the regularization of the multiplier block. Large enough that the constraints
   /// dominate (joint rows are O(1)), small enough that μJᵀJ leaves the objective's digits.
   double penalty = 1e6;
-  /// Levenberg–Marquardt damping added to the Gauss–Newton matrix, relative to its diagonal.
+  /// Levenberg–Marquardt damping added to the Newton matrix, relative to the largest diagonal
+  /// entry of its objective part (least astonishment and objective terms).
   double damping = 1e-12;
 };
 
@@ -71,6 +72,7 @@ class Solver {
       linearized_i_;  // per-term row weights for the second-derivative terms
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   double mu_ = 0.0;
+  double objective_scale_ = 1.0;
 };
 
 }  // namespace tangent::optimizer
