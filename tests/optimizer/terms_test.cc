@@ -37,6 +37,21 @@ Eigen::VectorXd RandomCoordinates(std::mt19937_64& rng, int n) {
   return q;
 }
 
+// Calls fn(side, k, q + h e, q − h e) for each of the 7 coordinates of each moving body of term.
+template <class Fn>
+void ForEachCoordinate(const Fixture& f, const Term& term, const Eigen::VectorXd& q, Fn&& fn) {
+  for (int side = 0; side < 2; ++side) {
+    const int body = side == 0 ? term.body_a() : term.body_b();
+    if (body < 0 || f.mech.offset(body) < 0) continue;
+    for (int k = 0; k < 7; ++k) {
+      Eigen::VectorXd qp = q, qm = q;
+      qp[f.mech.offset(body) + k] += kH;
+      qm[f.mech.offset(body) + k] -= kH;
+      fn(side, k, qp, qm);
+    }
+  }
+}
+
 void CheckTerm(const Fixture& f, const Term& term, std::mt19937_64& rng) {
   for (int trial = 0; trial < 5; ++trial) {
     const Eigen::VectorXd q = RandomCoordinates(rng, f.mech.num_coordinates());
@@ -47,26 +62,20 @@ void CheckTerm(const Fixture& f, const Term& term, std::mt19937_64& rng) {
     Eigen::MatrixXd Ja(m, 7), Jb(m, 7);
     term.Evaluate(poses, r, Ja, Jb);
     ASSERT_TRUE(r.allFinite()) << term.name();
-    for (int side = 0; side < 2; ++side) {
-      const int body = side == 0 ? term.body_a() : term.body_b();
-      if (body < 0 || f.mech.offset(body) < 0) continue;
-      for (int k = 0; k < 7; ++k) {
-        Eigen::VectorXd qp = q, qm = q;
-        qp[f.mech.offset(body) + k] += kH;
-        qm[f.mech.offset(body) + k] -= kH;
-        std::vector<BodyPose> pp, pm;
-        f.mech.Poses(qp, &pp);
-        f.mech.Poses(qm, &pm);
-        Eigen::VectorXd rp(m), rm(m);
-        Eigen::MatrixXd s1(m, 7), s2(m, 7);
-        term.Evaluate(pp, rp, s1, s2);
-        term.Evaluate(pm, rm, s1, s2);
-        const Eigen::VectorXd fd = (rp - rm) / (2 * kH);
-        const Eigen::VectorXd an = side == 0 ? Ja.col(k) : Jb.col(k);
-        EXPECT_LT((fd - an).cwiseAbs().maxCoeff(), kTol)
-            << term.name() << " body " << side << " coordinate " << k;
-      }
-    }
+    ForEachCoordinate(f, term, q,
+                      [&](int side, int k, const Eigen::VectorXd& qp, const Eigen::VectorXd& qm) {
+                        std::vector<BodyPose> pp, pm;
+                        f.mech.Poses(qp, &pp);
+                        f.mech.Poses(qm, &pm);
+                        Eigen::VectorXd rp(m), rm(m);
+                        Eigen::MatrixXd s1(m, 7), s2(m, 7);
+                        term.Evaluate(pp, rp, s1, s2);
+                        term.Evaluate(pm, rm, s1, s2);
+                        const Eigen::VectorXd fd = (rp - rm) / (2 * kH);
+                        const Eigen::VectorXd an = side == 0 ? Ja.col(k) : Jb.col(k);
+                        EXPECT_LT((fd - an).cwiseAbs().maxCoeff(), kTol)
+                            << term.name() << " body " << side << " coordinate " << k;
+                      });
   }
 }
 
@@ -94,33 +103,27 @@ void CheckHessian(const Fixture& f, const Term& term, std::mt19937_64& rng) {
       *ga = Ja.transpose() * w;
       *gb = Jb.transpose() * w;
     };
-    for (int side = 0; side < 2; ++side) {
-      const int body = side == 0 ? term.body_a() : term.body_b();
-      if (body < 0 || f.mech.offset(body) < 0) continue;
-      for (int k = 0; k < 7; ++k) {
-        Eigen::VectorXd qp = q, qm = q;
-        qp[f.mech.offset(body) + k] += kH;
-        qm[f.mech.offset(body) + k] -= kH;
-        Eigen::Matrix<double, 7, 1> gap, gbp, gam, gbm;
-        weighted_gradient(qp, &gap, &gbp);
-        weighted_gradient(qm, &gam, &gbm);
-        const Eigen::Matrix<double, 7, 1> dga = (gap - gam) / (2 * kH),
-                                          dgb = (gbp - gbm) / (2 * kH);
-        // Column k of ∂g_a/∂q_side and ∂g_b/∂q_side.
-        const Eigen::Matrix<double, 7, 1> an_a = side == 0
-                                                     ? Eigen::Matrix<double, 7, 1>(Haa.col(k))
-                                                     : Eigen::Matrix<double, 7, 1>(Hab.col(k));
-        const Eigen::Matrix<double, 7, 1> an_b =
-            side == 0 ? Eigen::Matrix<double, 7, 1>(Hab.row(k).transpose())
-                      : Eigen::Matrix<double, 7, 1>(Hbb.col(k));
-        EXPECT_LT((dga - an_a).cwiseAbs().maxCoeff(), 1e-6)
-            << term.name() << " H_a* side " << side << " k " << k;
-        if (term.body_b() >= 0 && f.mech.offset(term.body_b()) >= 0) {
-          EXPECT_LT((dgb - an_b).cwiseAbs().maxCoeff(), 1e-6)
-              << term.name() << " H_b* side " << side << " k " << k;
-        }
-      }
-    }
+    ForEachCoordinate(
+        f, term, q, [&](int side, int k, const Eigen::VectorXd& qp, const Eigen::VectorXd& qm) {
+          Eigen::Matrix<double, 7, 1> gap, gbp, gam, gbm;
+          weighted_gradient(qp, &gap, &gbp);
+          weighted_gradient(qm, &gam, &gbm);
+          const Eigen::Matrix<double, 7, 1> dga = (gap - gam) / (2 * kH),
+                                            dgb = (gbp - gbm) / (2 * kH);
+          // Column k of ∂g_a/∂q_side and ∂g_b/∂q_side.
+          const Eigen::Matrix<double, 7, 1> an_a = side == 0
+                                                       ? Eigen::Matrix<double, 7, 1>(Haa.col(k))
+                                                       : Eigen::Matrix<double, 7, 1>(Hab.col(k));
+          const Eigen::Matrix<double, 7, 1> an_b =
+              side == 0 ? Eigen::Matrix<double, 7, 1>(Hab.row(k).transpose())
+                        : Eigen::Matrix<double, 7, 1>(Hbb.col(k));
+          EXPECT_LT((dga - an_a).cwiseAbs().maxCoeff(), 1e-6)
+              << term.name() << " H_a* side " << side << " k " << k;
+          if (term.body_b() >= 0 && f.mech.offset(term.body_b()) >= 0) {
+            EXPECT_LT((dgb - an_b).cwiseAbs().maxCoeff(), 1e-6)
+                << term.name() << " H_b* side " << side << " k " << k;
+          }
+        });
   }
 }
 
