@@ -16,6 +16,7 @@ Solver::Solver(const Problem& problem, const SolverOptions& options)
   M_.setZero(n_, n_);
   H_.setZero(n_, n_);
   kkt_.setZero(n_);
+  grad_e_.setZero(n_);
   linearized_e_.setZero(problem.num_equality_rows());
   linearized_i_.setZero(problem.num_inequality_rows());
   weights_.setZero(std::max({problem.num_equality_rows(), problem.num_inequality_rows(),
@@ -30,29 +31,40 @@ void Solver::Reset() {
   mu_ = options_.penalty;
 }
 
-void Solver::Gradient(const Eigen::VectorXd& q, bool with_matrix) {
-  // g = ∇L = w_la M (q − q_prev) + Σ w J_oᵀ r_o − J_Eᵀ(λ_E − μ c_E) − J_Iᵀ max(0, λ_I − μ c_I)
-  // and, when asked, its Gauss–Newton matrix.
-  ev_.ObjectiveGradient(q, q_prev_, M_, &g_);
-  if (with_matrix) {
-    H_ = problem_.least_astonishment() * M_;
-    for (const Problem::Entry& o : problem_.objectives()) {
-      const auto J = ev_.J_o().middleRows(o.row, o.term->dim());
-      H_.noalias() += o.weight * (J.transpose() * J);
-    }
-    // The objective's share of the Newton matrix, for the damping's scale (1e-300: an empty
-    // objective).
-    objective_scale_ = H_.diagonal().cwiseAbs().maxCoeff() + 1e-300;
-  }
+void Solver::AugmentedGradient() {
+  // g = ∇L = ∇E − J_Eᵀ(λ_E − μ c_E) − J_Iᵀ max(0, λ_I − μ c_I), from ∇E in grad_e_.
+  g_ = grad_e_;
   g_.noalias() -= ev_.J_e().transpose() * (lambda_e_ - mu_ * ev_.c_e());
-  if (with_matrix) H_.noalias() += mu_ * (ev_.J_e().transpose() * ev_.J_e());
   for (int i = 0; i < ev_.c_i().size(); ++i) {
     shifted_[i] = std::max(0.0, lambda_i_[i] - mu_ * ev_.c_i()[i]);
-    if (shifted_[i] > 0.0) {
-      g_.noalias() -= shifted_[i] * ev_.J_i().row(i).transpose();
-      if (with_matrix) H_.noalias() += mu_ * (ev_.J_i().row(i).transpose() * ev_.J_i().row(i));
-    }
+    if (shifted_[i] > 0.0) g_.noalias() -= shifted_[i] * ev_.J_i().row(i).transpose();
   }
+}
+
+double Solver::NewtonMatrix() {
+  // H = w_la M + Σ w J_oᵀJ_o + μ J_EᵀJ_E + μ J_AᵀJ_A (A: rows with positive shifted multiplier,
+  // as left by AugmentedGradient), plus the Lagrangian's curvature: objectives weighted by w r,
+  // equalities by −λ_E, active inequalities by −λ_I.
+  H_ = problem_.least_astonishment() * M_;
+  for (const Problem::Entry& o : problem_.objectives()) {
+    const auto J = ev_.J_o().middleRows(o.row, o.term->dim());
+    H_.noalias() += o.weight * (J.transpose() * J);
+  }
+  // The objective's share of the matrix sets the damping's scale (1e-300: an empty objective).
+  const double objective_scale = H_.diagonal().cwiseAbs().maxCoeff() + 1e-300;
+  H_.noalias() += mu_ * (ev_.J_e().transpose() * ev_.J_e());
+  for (int i = 0; i < ev_.c_i().size(); ++i) {
+    if (shifted_[i] > 0.0) H_.noalias() += mu_ * (ev_.J_i().row(i).transpose() * ev_.J_i().row(i));
+  }
+  for (const Problem::Entry& o : problem_.objectives()) {
+    weights_.segment(o.row, o.term->dim()) = o.weight * ev_.r_o().segment(o.row, o.term->dim());
+  }
+  ev_.AddCurvature(problem_.objectives(), weights_, &H_);
+  weights_.head(ev_.c_e().size()) = -lambda_e_;
+  ev_.AddCurvature(problem_.equalities(), weights_, &H_);
+  for (int i = 0; i < ev_.c_i().size(); ++i) weights_[i] = shifted_[i] > 0.0 ? -lambda_i_[i] : 0.0;
+  ev_.AddCurvature(problem_.inequalities(), weights_, &H_);
+  return objective_scale;
 }
 
 void Solver::Normalize(Eigen::VectorXd* q) const {
@@ -84,16 +96,13 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
   // from the linearized constraints. Near a warm start this is Newton on the KKT system
   // (quadratic convergence); the 1/μ block keeps redundant constraints regular.
   for (st.iterations = 0; st.iterations < options_.max_iterations; ++st.iterations) {
-    Gradient(q, /*with_matrix=*/false);  // Also fills shifted_ = max(0, λ_I − μ c_I).
-    // KKT residual of the current iterate with the multipliers it would update to at Δq = 0.
+    // ∇E once per iteration: the KKT residual and the step's right-hand side both use it.
+    ev_.ObjectiveGradient(q, q_prev_, M_, &grad_e_);
     st.max_violation = Violation();
-    {
-      // ∇E − J_Eᵀλ_E − J_Iᵀλ_I at the current multipliers.
-      ev_.ObjectiveGradient(q, q_prev_, M_, &kkt_);
-      kkt_.noalias() -= ev_.J_e().transpose() * lambda_e_;
-      kkt_.noalias() -= ev_.J_i().transpose() * lambda_i_;
-      st.kkt_residual = kkt_.size() ? kkt_.cwiseAbs().maxCoeff() : 0.0;
-    }
+    kkt_ = grad_e_;  // ∇E − J_Eᵀλ_E − J_Iᵀλ_I at the current multipliers.
+    kkt_.noalias() -= ev_.J_e().transpose() * lambda_e_;
+    kkt_.noalias() -= ev_.J_i().transpose() * lambda_i_;
+    st.kkt_residual = kkt_.size() ? kkt_.cwiseAbs().maxCoeff() : 0.0;
     if (st.max_violation <= options_.constraint_tolerance &&
         st.kkt_residual <= options_.kkt_tolerance) {
       st.converged = true;
@@ -105,19 +114,8 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
       st.budget_exhausted = true;
       break;
     }
-    Gradient(q, /*with_matrix=*/true);
-    const double objective_scale = objective_scale_;
-    // Curvature of the Lagrangian: objectives weighted by w r, equalities by −λ_E, active
-    // inequalities by −λ_I (rows with a positive shifted multiplier).
-    for (const Problem::Entry& o : problem_.objectives()) {
-      weights_.segment(o.row, o.term->dim()) = o.weight * ev_.r_o().segment(o.row, o.term->dim());
-    }
-    ev_.AddCurvature(problem_.objectives(), weights_, &H_);
-    weights_.head(ev_.c_e().size()) = -lambda_e_;
-    ev_.AddCurvature(problem_.equalities(), weights_, &H_);
-    for (int i = 0; i < ev_.c_i().size(); ++i)
-      weights_[i] = shifted_[i] > 0.0 ? -lambda_i_[i] : 0.0;
-    ev_.AddCurvature(problem_.inequalities(), weights_, &H_);
+    AugmentedGradient();
+    const double objective_scale = NewtonMatrix();
     // Levenberg damping until positive definite (the Lagrangian's curvature may not be). Its
     // scale is the objective's part of the matrix, not μJᵀJ's: the curvature along a
     // mechanism's free motions is of the objective's size, and damping sized by μ|J|² (here

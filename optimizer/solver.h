@@ -58,7 +58,9 @@ class Solver {
   const Eigen::VectorXd& inequality_multipliers() const { return lambda_i_; }
 
  private:
-  void Gradient(const Eigen::VectorXd& q, bool with_matrix);
+  void AugmentedGradient();
+  /// Builds H_; returns the scale of its objective part (for the damping).
+  double NewtonMatrix();
   double Violation() const;
   void Normalize(Eigen::VectorXd* q) const;
 
@@ -68,11 +70,10 @@ class Solver {
   ProblemEvaluator ev_;
   Eigen::VectorXd q_prev_, lambda_e_, lambda_i_, g_, step_, q_try_, shifted_;
   Eigen::MatrixXd M_, H_;
-  Eigen::VectorXd weights_, kkt_, linearized_e_,
+  Eigen::VectorXd weights_, kkt_, grad_e_, linearized_e_,
       linearized_i_;  // per-term row weights for the second-derivative terms
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   double mu_ = 0.0;
-  double objective_scale_ = 1.0;
 };
 
 }  // namespace tangent::optimizer
