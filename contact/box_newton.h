@@ -43,6 +43,9 @@ bool IsSingular(const Eigen::FullPivLU<Eigen::Matrix<double, N, N>>& lu, double 
   const double first = std::abs(lu.matrixLU()(0, 0));
   const double last = std::abs(lu.matrixLU()(N - 1, N - 1));
   *rcond = first > 0.0 ? last / first : 0.0;
+  // "Negligible against the natural scale" is 1e-6 of it (kSingularRcond · 1e4): near a focal
+  // point the iterate stops ~1e-8 away in parameters and the matrix is that small (docs/
+  // stability.md), while regular extrema keep entries of the scale's order.
   return !(*rcond > kSingularRcond) || !std::isfinite(*rcond) ||
          (scale > 0.0 && !(first > kSingularRcond * 1e4 * scale));
 }

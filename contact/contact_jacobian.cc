@@ -8,13 +8,6 @@ namespace tangent::contact {
 
 namespace {
 
-// Derivative of the unit normal n = N/|N| along a parameter, given N's derivative.
-Eigen::Vector3d UnitNormalDerivative(const Eigen::Vector3d& N, const Eigen::Vector3d& N_x) {
-  const double len = N.norm();
-  const Eigen::Vector3d n = N / len;
-  return (N_x - n * n.dot(N_x)) / len;
-}
-
 // Inverse of a 2 x 2 matrix; false when it is singular by the same measure as the solver's:
 // |det| against scale², scale defaulting to the largest entry (then |det|/max|m_ij|² is within
 // a factor 2 of the reciprocal condition number). A matrix formed as a difference that cancels
@@ -28,14 +21,30 @@ bool Inverse2(const Eigen::Matrix2d& m, Eigen::Matrix2d* inv, double scale = 0.0
   return true;
 }
 
-// E = [x y]ᵀ [S_u S_v] and F = [x y]ᵀ [n_u n_v] in the surface's own contact frame.
-void FundamentalBlocks(const PlacedSurfacePoint& p, const Eigen::Matrix3d& frame,
-                       Eigen::Matrix2d* E, Eigen::Matrix2d* F) {
-  const Eigen::Matrix<double, 2, 3> P = frame.leftCols<2>().transpose();
-  E->col(0) = P * p.world.S_u;
-  E->col(1) = P * p.world.S_v;
-  F->col(0) = P * UnitNormalDerivative(p.N, p.N_u);
-  F->col(1) = P * UnitNormalDerivative(p.N, p.N_v);
+// One surface's contact-frame data used by every closed form: frame axes (world) and the 2 x 2
+// blocks E = [x y]ᵀ[S_u S_v] (upper triangular: x ∥ S_u) and F = [x y]ᵀ[n_u n_v] = [x y]ᵀ[N_u
+// N_v]/|N| (n_u = (N_u − n(n·N_u))/|N| and x, y ⟂ n).
+struct FrameBlocks {
+  Eigen::Vector3d x, y, z;
+  Eigen::Matrix2d E, F;
+  Eigen::Matrix3d frame() const {
+    Eigen::Matrix3d r;
+    r << x, y, z;
+    return r;
+  }
+};
+
+FrameBlocks MakeFrameBlocks(const PlacedSurfacePoint& p) {
+  FrameBlocks b;
+  const double su = p.world.S_u.norm();
+  const double inv_n = 1.0 / p.N.norm();
+  b.x = p.world.S_u / su;
+  b.z = p.N * inv_n;
+  b.y = b.z.cross(b.x);
+  b.E << su, b.x.dot(p.world.S_v), 0.0, b.y.dot(p.world.S_v);
+  b.F << b.x.dot(p.N_u) * inv_n, b.x.dot(p.N_v) * inv_n, b.y.dot(p.N_u) * inv_n,
+      b.y.dot(p.N_v) * inv_n;
+  return b;
 }
 
 }  // namespace
@@ -81,31 +90,6 @@ Matrix4x14 RelativeVelocityMap(const BodyPose& pose_f, const BodyPose& pose_g,
   b.block<2, 4>(2, 10) = P * pose_g.omega_map;
   return b;
 }
-
-namespace {
-
-// One surface's contact-frame data for the closed form: frame axes (world) and the 2 x 2 blocks
-// E = [x y]ᵀ[S_u S_v] (upper triangular: x ∥ S_u) and F = [x y]ᵀ[n_u n_v] = [x y]ᵀ[N_u N_v]/|N|
-// (n_u = (N_u − n(n·N_u))/|N| and x, y ⟂ n).
-struct FrameBlocks {
-  Eigen::Vector3d x, y, z;
-  Eigen::Matrix2d E, F;
-};
-
-FrameBlocks MakeFrameBlocks(const PlacedSurfacePoint& p) {
-  FrameBlocks b;
-  const double su = p.world.S_u.norm();
-  const double inv_n = 1.0 / p.N.norm();
-  b.x = p.world.S_u / su;
-  b.z = p.N * inv_n;
-  b.y = b.z.cross(b.x);
-  b.E << su, b.x.dot(p.world.S_v), 0.0, b.y.dot(p.world.S_v);
-  b.F << b.x.dot(p.N_u) * inv_n, b.x.dot(p.N_v) * inv_n, b.y.dot(p.N_u) * inv_n,
-      b.y.dot(p.N_v) * inv_n;
-  return b;
-}
-
-}  // namespace
 
 bool ContactJacobianClosedForm(const SurfacePairEval& e, const BodyPose& pose_f,
                                const BodyPose& pose_g, Matrix4x14* u_q) {
@@ -174,15 +158,14 @@ bool ContactJacobianClosedForm(const SurfacePairEval& e, const BodyPose& pose_f,
 bool ContactJacobianMontana(const SurfacePairEval& e, const BodyPose& pose_f,
                             const BodyPose& pose_g, Matrix4x14* u_q) {
   u_q->setZero();
-  const Eigen::Matrix3d frame_f = ContactFrame(e.f);
-  const Eigen::Matrix3d frame_g = ContactFrame(e.g);
-  Eigen::Matrix2d Ef, Ff, Eg, Fg, iEf, iEg;
-  FundamentalBlocks(e.f, frame_f, &Ef, &Ff);
-  FundamentalBlocks(e.g, frame_g, &Eg, &Fg);
-  if (!Inverse2(Ef, &iEf) || !Inverse2(Eg, &iEg)) return false;
-  const Eigen::Matrix2d R = frame_g.leftCols<2>().transpose() * frame_f.leftCols<2>();
-  const double beta = e.d.dot(frame_g.col(2));
-  const Eigen::Matrix2d IIf = Ff * iEf, IIg = Fg * iEg;
+  const FrameBlocks f = MakeFrameBlocks(e.f);
+  const FrameBlocks g = MakeFrameBlocks(e.g);
+  Eigen::Matrix2d iEf, iEg;
+  if (!Inverse2(f.E, &iEf) || !Inverse2(g.E, &iEg)) return false;
+  Eigen::Matrix2d R;
+  R << g.x.dot(f.x), g.x.dot(f.y), g.y.dot(f.x), g.y.dot(f.y);
+  const double beta = e.d.dot(g.z);
+  const Eigen::Matrix2d IIf = f.F * iEf, IIg = g.F * iEg;
   const Eigen::Matrix2d IIf_t = R * IIf * R;  // R is a reflection for facing normals: R⁻¹ = R.
   Eigen::Matrix2d m1, m2;
   if (!Inverse2(IIg + IIf_t + beta * IIg * IIf_t, &m1)) return false;
@@ -195,7 +178,7 @@ bool ContactJacobianMontana(const SurfacePairEval& e, const BodyPose& pose_f,
   A.block<2, 2>(0, 2) = iEf * R * m1 * W;
   A.block<2, 2>(2, 0) = -iEg * m2 * IIf_t;
   A.block<2, 2>(2, 2) = iEg * m2 * (Eigen::Matrix2d::Identity() + beta * IIf_t) * W;
-  *u_q = A * RelativeVelocityMap(pose_f, pose_g, e.g.world.S, frame_g);
+  *u_q = A * RelativeVelocityMap(pose_f, pose_g, e.g.world.S, g.frame());
   return true;
 }
 
@@ -239,9 +222,10 @@ bool CurveSurfaceJacobianImplicit(const CurveSurfaceEval& e, const BodyPose& pos
 bool CurveSurfaceJacobianClosedForm(const CurveSurfaceEval& e, const BodyPose& pose_f,
                                     const BodyPose& pose_g, Matrix3x14* u_q) {
   u_q->setZero();
-  const Eigen::Matrix3d frame = ContactFrame(e.f);
-  Eigen::Matrix2d Ef, Ff;
-  FundamentalBlocks(e.f, frame, &Ef, &Ff);
+  const FrameBlocks f = MakeFrameBlocks(e.f);
+  const Eigen::Matrix3d frame = f.frame();
+  const Eigen::Matrix2d& Ef = f.E;
+  const Eigen::Matrix2d& Ff = f.F;
   const Eigen::Matrix<double, 2, 3> P = frame.leftCols<2>().transpose();
   const double beta = e.d.dot(frame.col(2));
   const Eigen::Vector3d& g1 = e.g.world.C1;
