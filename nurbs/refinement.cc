@@ -258,13 +258,15 @@ NurbsSurface InsertKnot(const NurbsSurface& surface, Direction dir, double t, in
 
 namespace {
 
-// Bezier net of curve span mu: point a = Σ_k alpha_a[k] P_{mu-p+k}.
+// Bezier net of the order-d derivative of the curve's piece on span mu (d = 0: the piece
+// itself): point a = Σ_k alpha_a[k] P_{mu-p+k}, a = 0..p−d.
 template <class HPoint>
-void CurveBezierNet(const KnotVector& k, const std::vector<HPoint>& pw, int mu, HPoint* net) {
+void CurveBezierNet(const KnotVector& k, const std::vector<HPoint>& pw, int mu, int d,
+                    HPoint* net) {
   const int p = k.degree();
   AlphaRow rows[kMaxDegree + 1];
-  DerivativeBezierRows(k, mu, 0, rows);
-  for (int a = 0; a <= p; ++a) {
+  DerivativeBezierRows(k, mu, d, rows);
+  for (int a = 0; a <= p - d; ++a) {
     net[a].setZero();
     for (int i = 0; i <= p; ++i) {
       net[a] += rows[a][static_cast<size_t>(i)] * pw[static_cast<size_t>(mu - p + i)];
@@ -272,17 +274,17 @@ void CurveBezierNet(const KnotVector& k, const std::vector<HPoint>& pw, int mu, 
   }
 }
 
-// Bezier net of surface span (mu_u, mu_v), (p+1) x (q+1) row-major in u.
-void SurfaceBezierNet(const NurbsSurface& s, int mu_u, int mu_v, Eigen::Vector4d* net) {
-  const KnotVector& ku = s.knots_u();
-  const KnotVector& kv = s.knots_v();
-  const int p = ku.degree();
-  const int q = kv.degree();
+// Bezier net of ∂^{du+dv}A/∂u^du ∂v^dv on surface span (mu_u, mu_v) ((0, 0): the patch
+// itself), (p+1−du) x (q+1−dv) points row-major in u, each multiplied by `scale`.
+void SurfaceBezierNet(const NurbsSurface& s, int mu_u, int mu_v, int du, int dv, double scale,
+                      Eigen::Vector4d* net) {
+  const int p = s.degree_u();
+  const int q = s.degree_v();
   AlphaRow ru[kMaxDegree + 1], rv[kMaxDegree + 1];
-  DerivativeBezierRows(ku, mu_u, 0, ru);
-  DerivativeBezierRows(kv, mu_v, 0, rv);
-  for (int a = 0; a <= p; ++a) {
-    for (int b = 0; b <= q; ++b) {
+  DerivativeBezierRows(s.knots_u(), mu_u, du, ru);
+  DerivativeBezierRows(s.knots_v(), mu_v, dv, rv);
+  for (int a = 0; a <= p - du; ++a) {
+    for (int b = 0; b <= q - dv; ++b) {
       Eigen::Vector4d acc = Eigen::Vector4d::Zero();
       for (int i = 0; i <= p; ++i) {
         Eigen::Vector4d row = Eigen::Vector4d::Zero();
@@ -291,7 +293,7 @@ void SurfaceBezierNet(const NurbsSurface& s, int mu_u, int mu_v, Eigen::Vector4d
         }
         acc += ru[a][static_cast<size_t>(i)] * row;
       }
-      net[a * (q + 1) + b] = acc;
+      net[a * (q + 1 - dv) + b] = scale * acc;
     }
   }
 }
@@ -306,7 +308,7 @@ std::vector<NurbsCurve<Dim>> ExtractBezier(const NurbsCurve<Dim>& curve) {
   std::vector<NurbsCurve<Dim>> out;
   for (int mu : DomainSpans(k)) {
     std::vector<HPoint> net(static_cast<size_t>(p + 1));
-    CurveBezierNet(k, curve.weighted_points(), mu, net.data());
+    CurveBezierNet(k, curve.weighted_points(), mu, 0, net.data());
     out.push_back(NurbsCurve<Dim>::FromHomogeneous(
         KnotVector(p, ClampedBezierKnots(p, k[mu], k[mu + 1])), std::move(net)));
   }
@@ -322,7 +324,7 @@ std::vector<NurbsSurface> ExtractBezier(const NurbsSurface& surface) {
   for (int mu_u : DomainSpans(ku)) {
     for (int mu_v : DomainSpans(kv)) {
       std::vector<Eigen::Vector4d> net(static_cast<size_t>((p + 1) * (q + 1)));
-      SurfaceBezierNet(surface, mu_u, mu_v, net.data());
+      SurfaceBezierNet(surface, mu_u, mu_v, 0, 0, 1.0, net.data());
       out.push_back(NurbsSurface::FromHomogeneous(
           KnotVector(p, ClampedBezierKnots(p, ku[mu_u], ku[mu_u + 1])),
           KnotVector(q, ClampedBezierKnots(q, kv[mu_v], kv[mu_v + 1])), std::move(net)));
@@ -425,28 +427,13 @@ SpanFormSurface BuildSpanForm(const NurbsSurface& surface, double scale) {
   std::vector<Eigen::Vector4d> nets;
   nets.reserve(static_cast<size_t>(SpanFormSurface::NetPointsPerSpan(p, q)) *
                DomainSpans(ku).size() * DomainSpans(kv).size());
-  AlphaRow ru[kMaxDegree + 1], rv[kMaxDegree + 1];
   for (int mu_u : DomainSpans(ku)) {
     for (int mu_v : DomainSpans(kv)) {
       for (const auto& f : SpanFormSurface::kFamilies) {
-        const int a = f[0], b = f[1];
-        if (a > p || b > q) continue;
-        DerivativeBezierRows(ku, mu_u, a, ru);
-        DerivativeBezierRows(kv, mu_v, b, rv);
-        for (int i = 0; i <= p - a; ++i) {
-          for (int j = 0; j <= q - b; ++j) {
-            Eigen::Vector4d acc = Eigen::Vector4d::Zero();
-            for (int ii = 0; ii <= p; ++ii) {
-              Eigen::Vector4d row = Eigen::Vector4d::Zero();
-              for (int jj = 0; jj <= q; ++jj) {
-                row += rv[j][static_cast<size_t>(jj)] *
-                       surface.weighted_point(mu_u - p + ii, mu_v - q + jj);
-              }
-              acc += ru[i][static_cast<size_t>(ii)] * row;
-            }
-            nets.push_back(scale * acc);
-          }
-        }
+        if (f[0] > p || f[1] > q) continue;
+        nets.resize(nets.size() + static_cast<size_t>((p + 1 - f[0]) * (q + 1 - f[1])));
+        SurfaceBezierNet(surface, mu_u, mu_v, f[0], f[1], scale,
+                         nets.data() + nets.size() - (p + 1 - f[0]) * (q + 1 - f[1]));
       }
     }
   }
@@ -459,18 +446,10 @@ SpanFormCurve<Dim> BuildSpanForm(const NurbsCurve<Dim>& curve) {
   const KnotVector& k = curve.knots();
   const int p = k.degree();
   std::vector<HPoint> nets;
-  AlphaRow rows[kMaxDegree + 1];
   for (int mu : DomainSpans(k)) {
-    for (int a = 0; a <= std::min(kMaxOrder, p); ++a) {
-      DerivativeBezierRows(k, mu, a, rows);
-      for (int i = 0; i <= p - a; ++i) {
-        HPoint acc = HPoint::Zero();
-        for (int j = 0; j <= p; ++j) {
-          acc += rows[i][static_cast<size_t>(j)] *
-                 curve.weighted_points()[static_cast<size_t>(mu - p + j)];
-        }
-        nets.push_back(acc);
-      }
+    for (int d = 0; d <= std::min(kMaxOrder, p); ++d) {
+      nets.resize(nets.size() + static_cast<size_t>(p + 1 - d));
+      CurveBezierNet(k, curve.weighted_points(), mu, d, nets.data() + nets.size() - (p + 1 - d));
     }
   }
   return SpanFormCurve<Dim>(p, k.Breakpoints(), nets);
