@@ -21,12 +21,13 @@ SpanKernel BicubicKernelAvx2(int order);
 /// Whether this CPU runs AVX2 and FMA instructions (CPUID, checked once).
 bool HasAvx2Fma();
 
-// Horner scheme for a polynomial with vector coefficients c[0..n] (c[k] multiplies x^k) and its
-// first two derivatives. N > 0 fixes the degree at compile time so the loop unrolls.
+// Horner scheme for a polynomial of degree N with vector coefficients c[0..N] (c[k] multiplies
+// x^k) and its first two derivatives; N is fixed at compile time so the loop unrolls.
 template <int N, int Order>
-inline void Horner(const Eigen::Vector4d* c, int n_runtime, double x, Eigen::Vector4d* d0,
-                   Eigen::Vector4d* d1, Eigen::Vector4d* d2) {
-  const int n = N > 0 ? N : n_runtime;
+inline void Horner(const Eigen::Vector4d* c, double x, Eigen::Vector4d* d0, Eigen::Vector4d* d1,
+                   Eigen::Vector4d* d2) {
+  static_assert(N >= 1 && N <= 3, "power-basis kernels cover degrees 1..3");
+  constexpr int n = N;
   Eigen::Vector4d p0 = c[n];
   Eigen::Vector4d p1 = Eigen::Vector4d::Zero();
   Eigen::Vector4d p2 = Eigen::Vector4d::Zero();
@@ -40,27 +41,29 @@ inline void Horner(const Eigen::Vector4d* c, int n_runtime, double x, Eigen::Vec
   if constexpr (Order >= 2) *d2 = 2.0 * p2;
 }
 
-// Evaluates A and its partials on one span. Coefficient layout: C[a][b] at a*(q+1)+b.
+// Evaluates A and its partials on one span of degrees (P, Q) ≤ 3 in the power basis.
+// Coefficient layout: C[a][b] at a*(Q+1)+b. (The runtime degrees in the SpanKernel signature
+// serve the Bernstein kernel of higher degrees.)
 template <int P, int Q, int Order>
-void SurfaceKernel(const Eigen::Vector4d* c, int p_runtime, int q_runtime, double s, double t,
-                   double inv_hu, double inv_hv, HomogeneousSurfaceDerivs* out) {
-  const int p = P > 0 ? P : p_runtime;
-  const int q = Q > 0 ? Q : q_runtime;
+void SurfaceKernel(const Eigen::Vector4d* c, int, int, double s, double t, double inv_hu,
+                   double inv_hv, HomogeneousSurfaceDerivs* out) {
+  constexpr int p = P;
+  constexpr int q = Q;
   // Rows r0[a] = Σ_b C[a][b] t^b and their t-derivatives r1, r2.
   Eigen::Vector4d r0[kMaxDegree + 1], r1[kMaxDegree + 1], r2[kMaxDegree + 1];
   for (int a = 0; a <= p; ++a) {
-    Horner<Q, Order>(c + a * (q + 1), q, t, &r0[a], &r1[a], &r2[a]);
+    Horner<Q, Order>(c + a * (q + 1), t, &r0[a], &r1[a], &r2[a]);
   }
   Eigen::Vector4d unused1, unused2;
   // In s: A, A_s, A_ss from r0; A_t, A_st from r1; A_tt from r2.
-  Horner<P, Order>(r0, p, s, &out->A[0], &out->A[1], &out->A[3]);
+  Horner<P, Order>(r0, s, &out->A[0], &out->A[1], &out->A[3]);
   if constexpr (Order >= 1) {
-    Horner<P, Order - 1>(r1, p, s, &out->A[2], &out->A[4], &unused2);
+    Horner<P, Order - 1>(r1, s, &out->A[2], &out->A[4], &unused2);
     out->A[1] *= inv_hu;
     out->A[2] *= inv_hv;
   }
   if constexpr (Order >= 2) {
-    Horner<P, 0>(r2, p, s, &out->A[5], &unused1, &unused2);
+    Horner<P, 0>(r2, s, &out->A[5], &unused1, &unused2);
     out->A[3] *= inv_hu * inv_hu;
     out->A[4] *= inv_hu * inv_hv;
     out->A[5] *= inv_hv * inv_hv;
