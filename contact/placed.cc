@@ -1,5 +1,7 @@
 #include "contact/placed.h"
 
+#include "contact/rigid.h"
+
 namespace tangent::contact {
 
 BodyPose BodyPose::FromCoordinates(const Vector7d& q) {
@@ -82,14 +84,16 @@ Eigen::Matrix3d ContactFrame(const PlacedSurfacePoint& p) {
 Matrix37d PointJacobian(const BodyPose& pose, const Eigen::Vector3d& p_B) {
   Matrix37d j;
   j.leftCols<3>().setIdentity();
-  j.rightCols<4>() = RotateDerivative(pose.q.tail<4>(), p_B);
+  // d(R v)/dt = ω × (R v) = −[R v]× omega_map Q̇: the same derivative as RotateDerivative, from
+  // the map the pose already holds.
+  j.rightCols<4>().noalias() = -Skew(pose.R * p_B) * pose.omega_map;
   return j;
 }
 
 Matrix37d DirectionJacobian(const BodyPose& pose, const Eigen::Vector3d& a_B) {
   Matrix37d j;
   j.leftCols<3>().setZero();
-  j.rightCols<4>() = RotateDerivative(pose.q.tail<4>(), a_B);
+  j.rightCols<4>().noalias() = -Skew(pose.R * a_B) * pose.omega_map;
   return j;
 }
 

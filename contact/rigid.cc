@@ -28,19 +28,29 @@ Matrix34d RotateDerivative(const Eigen::Vector4d& Q, const Eigen::Vector3d& v) {
 
 Eigen::Matrix4d RotateHessian(const Eigen::Vector4d& Q, const Eigen::Vector3d& v,
                               const Eigen::Vector3d& y) {
+  return RotateHessianWeighted(Q, y * v.transpose());
+}
+
+Eigen::Matrix4d RotateHessianWeighted(const Eigen::Vector4d& Q, const Eigen::Matrix3d& W) {
+  // A(y vᵀ) with y·v = tr W and (v × y)_i = ε_ijk W_kj.
   Eigen::Matrix4d A;
-  const double yv = y.dot(v);
-  const Eigen::Vector3d vy = v.cross(y);
+  const double yv = W.trace();
+  const Eigen::Vector3d vy(W(2, 1) - W(1, 2), W(0, 2) - W(2, 0), W(1, 0) - W(0, 1));
   A(0, 0) = yv;
   A.block<1, 3>(0, 1) = vy.transpose();
   A.block<3, 1>(1, 0) = vy;
-  A.block<3, 3>(1, 1) = -yv * Eigen::Matrix3d::Identity() + y * v.transpose() + v * y.transpose();
-  const double s = Q.squaredNorm();
-  const double phi = Q.dot(A * Q);
+  A.block<3, 3>(1, 1) = W + W.transpose();
+  A.block<3, 3>(1, 1).diagonal().array() -= yv;
+  const double inv_s = 1.0 / Q.squaredNorm();
   const Eigen::Vector4d AQ = A * Q;
-  return 2.0 * A / s - 4.0 * (AQ * Q.transpose() + Q * AQ.transpose()) / (s * s) -
-         2.0 * phi * Eigen::Matrix4d::Identity() / (s * s) +
-         8.0 * phi * Q * Q.transpose() / (s * s * s);
+  const double phi = Q.dot(AQ);
+  const Eigen::Vector4d Qs = Q * inv_s;
+  // 2A/s − 4(AQ Qᵀ + Q AQᵀ)/s² − 2φ I/s² + 8φ Q Qᵀ/s³.
+  Eigen::Matrix4d H = (2.0 * inv_s) * A;
+  H.noalias() -= (4.0 * inv_s) * (AQ * Qs.transpose() + Qs * AQ.transpose());
+  H.diagonal().array() -= 2.0 * phi * inv_s * inv_s;
+  H.noalias() += (8.0 * phi * inv_s) * (Qs * Qs.transpose());
+  return H;
 }
 
 Matrix34d GBody(const Eigen::Vector4d& Q) {

@@ -52,6 +52,10 @@ inline Eigen::Vector3d TorqueFromQuaternionForce(const Eigen::Vector4d& Q,
 /// f(Q) = QᵀAQ / QᵀQ and ∇²f = 2A/s − 4(AQQᵀ + QQᵀA)/s² − 2φ I/s² + 8φ QQᵀ/s³, s = QᵀQ, φ = QᵀAQ.
 Eigen::Matrix4d RotateHessian(const Eigen::Vector4d& Q, const Eigen::Vector3d& v,
                               const Eigen::Vector3d& y);
+/// Σ_k ∇²_Q [y_kᵀ R(Q/|Q|) v_k] for the weight W = Σ_k y_k v_kᵀ (3 x 3): the Hessian is linear
+/// in y vᵀ (A above is), so every curvature a body's rotation contributes to a Newton matrix is
+/// accumulated into one W and folded once per body.
+Eigen::Matrix4d RotateHessianWeighted(const Eigen::Vector4d& Q, const Eigen::Matrix3d& W);
 
 /// [a]×, the cross-product matrix: [a]× b = a × b.
 inline Eigen::Matrix3d Skew(const Eigen::Vector3d& a) {

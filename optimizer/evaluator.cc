@@ -1,23 +1,57 @@
 #include "optimizer/evaluator.h"
 
+#include "contact/rigid.h"
+
 namespace tangent::optimizer {
 
-ProblemEvaluator::ProblemEvaluator(const Problem& problem) : problem_(problem) {
+ProblemEvaluator::ProblemEvaluator(const Problem& problem, bool dense_jacobians)
+    : problem_(problem), dense_jacobians_(dense_jacobians) {
   const Mechanism& m = problem.mechanism();
   const int n = m.num_coordinates();
   m.Poses(m.InitialCoordinates(), &poses_);
-  c_e_.setZero(problem.num_equality_rows());
-  c_i_.setZero(problem.num_inequality_rows());
-  r_o_.setZero(problem.num_objective_rows());
-  J_e_.setZero(problem.num_equality_rows(), n);
-  J_i_.setZero(problem.num_inequality_rows(), n);
-  J_o_.setZero(problem.num_objective_rows(), n);
-  int max_dim = 1;
-  for (const auto* list : {&problem.equalities(), &problem.inequalities(), &problem.objectives()}) {
-    for (const auto& e : *list) max_dim = std::max(max_dim, e.term->dim());
+  const int rows[3] = {problem.num_equality_rows(), problem.num_inequality_rows(),
+                       problem.num_objective_rows()};
+  for (int k = 0; k < 3; ++k) {
+    values_[k].setZero(rows[k]);
+    J_a_[k].setZero(rows[k], 7);
+    J_b_[k].setZero(rows[k], 7);
+    if (dense_jacobians_) dense_[k].setZero(rows[k], n);
+    for (const Problem::Entry& e : List(static_cast<Kind>(k))) {
+      Item it;
+      it.term = e.term.get();
+      it.weight = e.weight;
+      it.row = e.row;
+      it.dim = e.term->dim();
+      it.body_a = e.term->body_a();
+      it.body_b = e.term->body_b();
+      it.block_a = m.offset(it.body_a) >= 0 ? m.offset(it.body_a) / 7 : -1;
+      it.block_b = it.body_b >= 0 && m.offset(it.body_b) >= 0 ? m.offset(it.body_b) / 7 : -1;
+      items_[k].push_back(it);
+    }
   }
-  scratch_a_.setZero(max_dim, 7);
-  scratch_b_.setZero(max_dim, 7);
+  rotation_weights_.assign(static_cast<size_t>(m.num_moving()), Eigen::Matrix3d::Zero());
+}
+
+const std::vector<Problem::Entry>& ProblemEvaluator::List(Kind kind) const {
+  switch (kind) {
+    case kEquality:
+      return problem_.equalities();
+    case kInequality:
+      return problem_.inequalities();
+    case kObjective:
+      break;
+  }
+  return problem_.objectives();
+}
+
+std::vector<std::pair<int, int>> ProblemEvaluator::CoupledBlocks() const {
+  std::vector<std::pair<int, int>> pairs;
+  for (const auto& items : items_) {
+    for (const Item& it : items) {
+      if (it.block_a >= 0 && it.block_b >= 0) pairs.emplace_back(it.block_a, it.block_b);
+    }
+  }
+  return pairs;
 }
 
 void ProblemEvaluator::Evaluate(const Eigen::VectorXd& q) {
@@ -27,29 +61,161 @@ void ProblemEvaluator::Evaluate(const Eigen::VectorXd& q) {
       poses_[static_cast<size_t>(i)] = BodyPose::FromCoordinates(q.segment<7>(m.offset(i)));
     }
   }
-  auto fill = [&](const std::vector<Problem::Entry>& list, Eigen::VectorXd* c, Eigen::MatrixXd* J) {
-    for (const Problem::Entry& e : list) {
-      const int d = e.term->dim();
-      auto ja = scratch_a_.topRows(d);
-      auto jb = scratch_b_.topRows(d);
-      e.term->Evaluate(poses_, c->segment(e.row, d), ja, jb);
-      J->middleRows(e.row, d).setZero();
-      const int oa = m.offset(e.term->body_a());
-      const int ob = e.term->body_b() >= 0 ? m.offset(e.term->body_b()) : -1;
-      if (oa >= 0) J->block(e.row, oa, d, 7) = ja;
-      if (ob >= 0) J->block(e.row, ob, d, 7) += jb;  // += : a term may name one body twice.
+  for (int k = 0; k < 3; ++k) {
+    for (const Item& it : items_[k]) {
+      auto ja = J_a_[k].middleRows(it.row, it.dim);
+      auto jb = J_b_[k].middleRows(it.row, it.dim);
+      it.term->Evaluate(poses_, values_[k].segment(it.row, it.dim), ja, jb);
+      if (it.block_b < 0) jb.setZero();
+      if (it.block_a < 0) ja.setZero();
     }
-  };
-  fill(problem_.equalities(), &c_e_, &J_e_);
-  fill(problem_.inequalities(), &c_i_, &J_i_);
-  fill(problem_.objectives(), &r_o_, &J_o_);
+    if (!dense_jacobians_) continue;
+    Eigen::MatrixXd& J = dense_[k];
+    J.setZero();
+    for (const Item& it : items_[k]) {
+      if (it.block_a >= 0)
+        J.block(it.row, 7 * it.block_a, it.dim, 7) = J_a_[k].middleRows(it.row, it.dim);
+      // += : a term may name one body twice.
+      if (it.block_b >= 0)
+        J.block(it.row, 7 * it.block_b, it.dim, 7) += J_b_[k].middleRows(it.row, it.dim);
+    }
+  }
+}
+
+double ProblemEvaluator::Objective(const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
+                                   const std::vector<Matrix7d>& M) const {
+  double e = 0.0;
+  for (size_t b = 0; b < M.size(); ++b) {
+    const Eigen::Matrix<double, 7, 1> d =
+        q.segment<7>(7 * static_cast<int>(b)) - q_ref.segment<7>(7 * static_cast<int>(b));
+    e += d.dot(M[b] * d);
+  }
+  e *= 0.5 * problem_.least_astonishment();
+  for (const Item& it : items_[kObjective]) {
+    e += 0.5 * it.weight * values_[kObjective].segment(it.row, it.dim).squaredNorm();
+  }
+  return e;
+}
+
+void ProblemEvaluator::ObjectiveGradient(const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
+                                         const std::vector<Matrix7d>& M, Eigen::VectorXd* g) const {
+  const double w = problem_.least_astonishment();
+  for (size_t b = 0; b < M.size(); ++b) {
+    const int o = 7 * static_cast<int>(b);
+    g->segment<7>(o).noalias() = w * (M[b] * (q.segment<7>(o) - q_ref.segment<7>(o)));
+  }
+  for (const Item& it : items_[kObjective]) {
+    const auto r = values_[kObjective].segment(it.row, it.dim);
+    if (it.block_a >= 0) {
+      g->segment<7>(7 * it.block_a).noalias() +=
+          it.weight * (J_a_[kObjective].middleRows(it.row, it.dim).transpose() * r);
+    }
+    if (it.block_b >= 0) {
+      g->segment<7>(7 * it.block_b).noalias() +=
+          it.weight * (J_b_[kObjective].middleRows(it.row, it.dim).transpose() * r);
+    }
+  }
+}
+
+void ProblemEvaluator::AddJacobianTransposeTimes(Kind kind, const Eigen::VectorXd& v, double scale,
+                                                 Eigen::VectorXd* g) const {
+  // Row by row with fixed-size 7-vectors (a dynamic d x 7 transpose product costs 3x more here).
+  const JacobianRows& Ja = J_a_[kind];
+  const JacobianRows& Jb = J_b_[kind];
+  for (const Item& it : items_[kind]) {
+    Vector7d ga = Vector7d::Zero(), gb = Vector7d::Zero();
+    for (int r = it.row; r < it.row + it.dim; ++r) {
+      ga.noalias() += v[r] * Ja.row(r).transpose();
+      gb.noalias() += v[r] * Jb.row(r).transpose();
+    }
+    if (it.block_a >= 0) g->segment<7>(7 * it.block_a) += scale * ga;
+    if (it.block_b >= 0) g->segment<7>(7 * it.block_b) += scale * gb;
+  }
+}
+
+void ProblemEvaluator::JacobianTimes(Kind kind, const Eigen::VectorXd& x,
+                                     Eigen::VectorXd* out) const {
+  const JacobianRows& Ja = J_a_[kind];
+  const JacobianRows& Jb = J_b_[kind];
+  for (const Item& it : items_[kind]) {
+    const Vector7d xa = it.block_a >= 0 ? Vector7d(x.segment<7>(7 * it.block_a)) : Vector7d::Zero();
+    const Vector7d xb = it.block_b >= 0 ? Vector7d(x.segment<7>(7 * it.block_b)) : Vector7d::Zero();
+    for (int r = it.row; r < it.row + it.dim; ++r) {
+      (*out)[r] = Ja.row(r).dot(xa.transpose()) + Jb.row(r).dot(xb.transpose());
+    }
+  }
+}
+
+void ProblemEvaluator::AddGaussNewton(Kind kind, const Eigen::VectorXd& row_weights,
+                                      BlockMatrix* H) const {
+  // Rank-one updates per row into fixed-size 7 x 7 accumulators; only the lower block triangle
+  // is written (the factorizations read the lower triangle).
+  const JacobianRows& Ja = J_a_[kind];
+  const JacobianRows& Jb = J_b_[kind];
+  for (const Item& it : items_[kind]) {
+    Matrix7d aa = Matrix7d::Zero(), ab = Matrix7d::Zero(), bb = Matrix7d::Zero();
+    bool any = false;
+    for (int r = it.row; r < it.row + it.dim; ++r) {
+      const double w = row_weights[r];
+      if (w == 0.0) continue;
+      any = true;
+      const Vector7d a = Ja.row(r).transpose(), b = Jb.row(r).transpose();
+      const Vector7d wa = w * a;
+      aa.noalias() += wa * a.transpose();
+      if (it.block_b >= 0) {
+        bb.noalias() += (w * b) * b.transpose();
+        ab.noalias() += wa * b.transpose();
+      }
+    }
+    if (!any) continue;
+    if (it.block_a >= 0) H->Block(it.block_a, it.block_a) += aa;
+    if (it.block_b >= 0) H->Block(it.block_b, it.block_b) += bb;
+    if (it.block_a >= 0 && it.block_b >= 0) H->AddOffDiagonal(it.block_a, it.block_b, ab);
+  }
+}
+
+void ProblemEvaluator::AddCurvature(Kind kind, const Eigen::VectorXd& weights, BlockMatrix* H) {
+  TermHessian h;
+  for (const Item& it : items_[kind]) {
+    if (!it.term->has_hessian()) continue;
+    const auto w = weights.segment(it.row, it.dim);
+    if (!(w.array() != 0.0).any()) continue;
+    h.SetZero();
+    it.term->AddWeightedHessian(poses_, w, &h);
+    if (it.block_a >= 0) {
+      H->Block(it.block_a, it.block_a) += h.aa;
+      rotation_weights_[static_cast<size_t>(it.block_a)] += h.W_a;
+    }
+    if (it.block_b >= 0) {
+      H->Block(it.block_b, it.block_b) += h.bb;
+      rotation_weights_[static_cast<size_t>(it.block_b)] += h.W_b;
+    }
+    if (it.block_a >= 0 && it.block_b >= 0) H->AddOffDiagonal(it.block_a, it.block_b, h.ab);
+  }
+  rotations_pending_ = true;
+}
+
+void ProblemEvaluator::FoldRotations(BlockMatrix* H) {
+  if (!rotations_pending_) return;
+  const Mechanism& m = problem_.mechanism();
+  for (int i = 0; i < m.num_bodies(); ++i) {
+    const int o = m.offset(i);
+    if (o < 0) continue;
+    Eigen::Matrix3d& W = rotation_weights_[static_cast<size_t>(o / 7)];
+    if (!W.isZero(0.0)) {
+      H->Block(o / 7, o / 7).bottomRightCorner<4, 4>() +=
+          contact::RotateHessianWeighted(poses_[static_cast<size_t>(i)].q.tail<4>(), W);
+      W.setZero();
+    }
+  }
+  rotations_pending_ = false;
 }
 
 double ProblemEvaluator::Objective(const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
                                    const Eigen::MatrixXd& M) const {
   double e = 0.5 * problem_.least_astonishment() * (q - q_ref).dot(M * (q - q_ref));
-  for (const Problem::Entry& o : problem_.objectives()) {
-    e += 0.5 * o.weight * r_o_.segment(o.row, o.term->dim()).squaredNorm();
+  for (const Item& it : items_[kObjective]) {
+    e += 0.5 * it.weight * values_[kObjective].segment(it.row, it.dim).squaredNorm();
   }
   return e;
 }
@@ -57,32 +223,27 @@ double ProblemEvaluator::Objective(const Eigen::VectorXd& q, const Eigen::Vector
 void ProblemEvaluator::ObjectiveGradient(const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
                                          const Eigen::MatrixXd& M, Eigen::VectorXd* g) const {
   g->noalias() = problem_.least_astonishment() * (M * (q - q_ref));
-  for (const Problem::Entry& o : problem_.objectives()) {
-    g->noalias() += o.weight * (J_o_.middleRows(o.row, o.term->dim()).transpose() *
-                                r_o_.segment(o.row, o.term->dim()));
-  }
+  Eigen::VectorXd wr = values_[kObjective];
+  for (const Item& it : items_[kObjective]) wr.segment(it.row, it.dim) *= it.weight;
+  AddJacobianTransposeTimes(kObjective, wr, 1.0, g);
 }
 
 void ProblemEvaluator::AddCurvature(const std::vector<Problem::Entry>& list,
-                                    const Eigen::VectorXd& weights, Eigen::MatrixXd* H) const {
-  const Mechanism& m = problem_.mechanism();
-  Term::Matrix7d haa, hab, hbb;
-  for (const Problem::Entry& e : list) {
-    if (!e.term->has_hessian()) continue;
-    const int d = e.term->dim();
-    haa.setZero();
-    hab.setZero();
-    hbb.setZero();
-    e.term->AddWeightedHessian(poses_, weights.segment(e.row, d), &haa, &hab, &hbb);
-    const int oa = m.offset(e.term->body_a());
-    const int ob = e.term->body_b() >= 0 ? m.offset(e.term->body_b()) : -1;
-    if (oa >= 0) H->block<7, 7>(oa, oa) += haa;
-    if (ob >= 0) H->block<7, 7>(ob, ob) += hbb;
-    if (oa >= 0 && ob >= 0) {
-      H->block<7, 7>(oa, ob) += hab;
-      H->block<7, 7>(ob, oa) += hab.transpose();
-    }
-  }
+                                    const Eigen::VectorXd& weights, Eigen::MatrixXd* H) {
+  const Kind kind = &list == &problem_.equalities()     ? kEquality
+                    : &list == &problem_.inequalities() ? kInequality
+                                                        : kObjective;
+  BlockMatrix dense(problem_.mechanism().num_moving(), {}, false);
+  AddCurvature(kind, weights, &dense);
+  FoldRotations(&dense);
+  *H += Eigen::MatrixXd(dense.dense().selfadjointView<Eigen::Lower>());
+}
+
+void TermHessian::Fold(const Eigen::Vector4d& Q_a, const Eigen::Vector4d& Q_b) {
+  aa.bottomRightCorner<4, 4>() += contact::RotateHessianWeighted(Q_a, W_a);
+  bb.bottomRightCorner<4, 4>() += contact::RotateHessianWeighted(Q_b, W_b);
+  W_a.setZero();
+  W_b.setZero();
 }
 
 }  // namespace tangent::optimizer

@@ -1,49 +1,91 @@
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "optimizer/block_matrix.h"
 #include "optimizer/problem.h"
 
 namespace tangent::optimizer {
 
-/// Evaluates a Problem's terms at q into dense stacked arrays: equality values c_E and Jacobian
-/// J_E, inequalities c_I, J_I, objective residuals r_O, J_O (rows as in Problem::Entry::row,
-/// n = 7 x moving bodies columns). Storage is sized at construction; Evaluate allocates nothing.
-/// Shared by the solver and by the adapters that hand the same problem to peer solvers.
+/// Evaluates a Problem's terms at q. Values are stacked per kind (equalities c_E, inequalities
+/// c_I, objective residuals r_O; rows as in Problem::Entry::row); Jacobians are kept as each
+/// term's two 7-column blocks, and the products the solver needs (Jᵀv, Jx, JᵀDJ, the weighted
+/// curvature) are formed block by block into a BlockMatrix. With `dense_jacobians`, Evaluate
+/// also fills the dense stacked Jacobians (J_e(), J_i(), J_o()) that peer-solver adapters want.
+/// Storage is sized at construction; Evaluate and the products allocate nothing.
 class ProblemEvaluator {
  public:
-  explicit ProblemEvaluator(const Problem& problem);
+  enum Kind { kEquality = 0, kInequality = 1, kObjective = 2 };
+
+  explicit ProblemEvaluator(const Problem& problem, bool dense_jacobians = true);
 
   void Evaluate(const Eigen::VectorXd& q);
 
-  /// E(q) = ½ w_la (q − q_ref)ᵀ M (q − q_ref) + Σ ½ w |r|² with the values of the last Evaluate.
+  /// Body pairs (moving-body block indices) coupled by some term, for BlockMatrix's pattern.
+  std::vector<std::pair<int, int>> CoupledBlocks() const;
+
+  /// E(q) = ½ w_la (q − q_ref)ᵀ M (q − q_ref) + Σ ½ w |r|² with the values of the last Evaluate;
+  /// M as 7 x 7 blocks per moving body (Mechanism::MetricBlocks).
+  double Objective(const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
+                   const std::vector<Matrix7d>& M) const;
+  /// ∇E into *g.
+  void ObjectiveGradient(const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
+                         const std::vector<Matrix7d>& M, Eigen::VectorXd* g) const;
+  /// *g += scale · J_kindᵀ v (v indexed like the kind's stacked rows).
+  void AddJacobianTransposeTimes(Kind kind, const Eigen::VectorXd& v, double scale,
+                                 Eigen::VectorXd* g) const;
+  /// *out = J_kind x.
+  void JacobianTimes(Kind kind, const Eigen::VectorXd& x, Eigen::VectorXd* out) const;
+  /// H += J_kindᵀ diag(row_weights) J_kind.
+  void AddGaussNewton(Kind kind, const Eigen::VectorXd& row_weights, BlockMatrix* H) const;
+  /// H += Σ_rows weight_row ∇²r_row for the kind's terms with second derivatives. Rotation
+  /// curvature is accumulated per body and folded by FoldRotations (call it once, after the
+  /// last AddCurvature of a matrix).
+  void AddCurvature(Kind kind, const Eigen::VectorXd& weights, BlockMatrix* H);
+  void FoldRotations(BlockMatrix* H);
+  /// Dense variants for peer adapters: M and H dense n x n.
   double Objective(const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
                    const Eigen::MatrixXd& M) const;
-  /// ∇E into *g (same conventions).
   void ObjectiveGradient(const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
                          const Eigen::MatrixXd& M, Eigen::VectorXd* g) const;
-  /// Adds Σ_entries Σ_rows weight_row ∇²r_row (terms with second derivatives) to *H at the
-  /// bodies' blocks; `weights` is indexed like the stacked rows of `list`.
+  /// H += Σ w ∇²r over `list`'s kind (dense H; folds its rotations itself).
   void AddCurvature(const std::vector<Problem::Entry>& list, const Eigen::VectorXd& weights,
-                    Eigen::MatrixXd* H) const;
+                    Eigen::MatrixXd* H);
 
   const Problem& problem() const { return problem_; }
   const std::vector<BodyPose>& poses() const { return poses_; }
-  const Eigen::VectorXd& c_e() const { return c_e_; }
-  const Eigen::VectorXd& c_i() const { return c_i_; }
-  const Eigen::VectorXd& r_o() const { return r_o_; }
-  const Eigen::MatrixXd& J_e() const { return J_e_; }
-  const Eigen::MatrixXd& J_i() const { return J_i_; }
-  const Eigen::MatrixXd& J_o() const { return J_o_; }
+  const Eigen::VectorXd& values(Kind kind) const { return values_[kind]; }
+  const Eigen::VectorXd& c_e() const { return values_[kEquality]; }
+  const Eigen::VectorXd& c_i() const { return values_[kInequality]; }
+  const Eigen::VectorXd& r_o() const { return values_[kObjective]; }
+  /// Dense stacked Jacobians (only with dense_jacobians).
+  const Eigen::MatrixXd& J_e() const { return dense_[kEquality]; }
+  const Eigen::MatrixXd& J_i() const { return dense_[kInequality]; }
+  const Eigen::MatrixXd& J_o() const { return dense_[kObjective]; }
 
  private:
+  struct Item {
+    const Term* term = nullptr;
+    double weight = 1.0;
+    int row = 0, dim = 0;
+    int body_a = -1, body_b = -1;    // mechanism body indices
+    int block_a = -1, block_b = -1;  // moving-body block indices (−1: fixed or none)
+  };
+  const std::vector<Problem::Entry>& List(Kind kind) const;
+
   const Problem& problem_;
+  bool dense_jacobians_;
   std::vector<BodyPose> poses_;
-  Eigen::VectorXd c_e_, c_i_, r_o_;
-  Eigen::MatrixXd J_e_, J_i_, J_o_;
-  mutable Eigen::MatrixXd scratch_a_, scratch_b_;
+  std::array<std::vector<Item>, 3> items_;
+  std::array<Eigen::VectorXd, 3> values_;
+  using JacobianRows = Eigen::Matrix<double, Eigen::Dynamic, 7>;
+  std::array<JacobianRows, 3> J_a_, J_b_;
+  std::array<Eigen::MatrixXd, 3> dense_;
+  std::vector<Eigen::Matrix3d> rotation_weights_;  // per moving block
+  bool rotations_pending_ = false;
 };
 
 }  // namespace tangent::optimizer

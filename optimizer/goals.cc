@@ -31,13 +31,10 @@ class Orientation final : public Term {
     }
   }
   bool has_hessian() const override { return true; }
-  void AddWeightedHessian(const std::vector<BodyPose>& poses,
-                          const Eigen::Ref<const Eigen::VectorXd>& w, Matrix7d* H_aa, Matrix7d*,
-                          Matrix7d*) const override {
-    const BodyPose& p = poses[static_cast<size_t>(body_)];
+  void AddWeightedHessian(const std::vector<BodyPose>&, const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override {
     for (int i = 0; i < 3; ++i) {
-      H_aa->block<4, 4>(3, 3) += contact::RotateHessian(p.q.tail<4>(), Eigen::Vector3d::Unit(i),
-                                                        w_[i] * w.segment<3>(3 * i));
+      h->W_a.col(i) += w_[i] * w.segment<3>(3 * i);  // y eᵢᵀ
     }
   }
 
@@ -61,10 +58,10 @@ class Concat final : public Term {
   }
   bool has_hessian() const override { return a_->has_hessian() && b_->has_hessian(); }
   void AddWeightedHessian(const std::vector<BodyPose>& poses,
-                          const Eigen::Ref<const Eigen::VectorXd>& w, Matrix7d* H_aa,
-                          Matrix7d* H_ab, Matrix7d* H_bb) const override {
-    a_->AddWeightedHessian(poses, w.head(a_->dim()), H_aa, H_ab, H_bb);
-    b_->AddWeightedHessian(poses, w.tail(b_->dim()), H_aa, H_ab, H_bb);
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override {
+    a_->AddWeightedHessian(poses, w.head(a_->dim()), h);
+    b_->AddWeightedHessian(poses, w.tail(b_->dim()), h);
   }
 
  private:
@@ -111,11 +108,9 @@ class Line final : public Term {
     J_a = P_ * contact::PointJacobian(p, at_.point);
   }
   bool has_hessian() const override { return true; }
-  void AddWeightedHessian(const std::vector<BodyPose>& poses,
-                          const Eigen::Ref<const Eigen::VectorXd>& w, Matrix7d* H_aa, Matrix7d*,
-                          Matrix7d*) const override {
-    const BodyPose& p = poses[static_cast<size_t>(at_.body)];
-    H_aa->block<4, 4>(3, 3) += contact::RotateHessian(p.q.tail<4>(), at_.point, P_ * w.head<3>());
+  void AddWeightedHessian(const std::vector<BodyPose>&, const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override {
+    h->W_a.noalias() += (P_ * w.head<3>()) * at_.point.transpose();
   }
 
  private:
@@ -146,11 +141,11 @@ class Plane final : public Term {
   }
   bool has_hessian() const override { return true; }
   void AddWeightedHessian(const std::vector<BodyPose>& poses,
-                          const Eigen::Ref<const Eigen::VectorXd>& w, Matrix7d* H_aa, Matrix7d*,
-                          Matrix7d*) const override {
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override {
     const BodyPose& p = poses[static_cast<size_t>(at_.body)];
     if (one_sided_ && n_.dot(p.Point(at_.point) - o_) > 0) return;
-    H_aa->block<4, 4>(3, 3) += contact::RotateHessian(p.q.tail<4>(), at_.point, w[0] * n_);
+    h->W_a.noalias() += (w[0] * n_) * at_.point.transpose();
   }
 
  private:
@@ -218,11 +213,10 @@ void PositionGoalTerm::Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<E
   J_a = contact::PointJacobian(p, at_.point);
 }
 
-void PositionGoalTerm::AddWeightedHessian(const std::vector<BodyPose>& poses,
+void PositionGoalTerm::AddWeightedHessian(const std::vector<BodyPose>&,
                                           const Eigen::Ref<const Eigen::VectorXd>& w,
-                                          Matrix7d* H_aa, Matrix7d*, Matrix7d*) const {
-  const BodyPose& p = poses[static_cast<size_t>(at_.body)];
-  H_aa->block<4, 4>(3, 3) += contact::RotateHessian(p.q.tail<4>(), at_.point, w.head<3>());
+                                          TermHessian* h) const {
+  h->W_a.noalias() += w.head<3>() * at_.point.transpose();
 }
 
 std::shared_ptr<PositionGoalTerm> MakePositionGoal(const Attachment& at, const Eigen::Vector3d& t) {

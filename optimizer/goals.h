@@ -23,8 +23,8 @@ class PositionGoalTerm final : public Term {
                 Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
   bool has_hessian() const override { return true; }
   void AddWeightedHessian(const std::vector<BodyPose>& poses,
-                          const Eigen::Ref<const Eigen::VectorXd>& w, Matrix7d* H_aa,
-                          Matrix7d* H_ab, Matrix7d* H_bb) const override;
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override;
 
  private:
   Attachment at_;

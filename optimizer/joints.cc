@@ -87,22 +87,19 @@ struct Rows {
   }
 };
 
-// The same rows' weighted second derivatives (weights w, one per row, consumed in order).
+// The same rows' weighted second derivatives (weights w, one per row, consumed in order). Curvature
+// of rotated vectors goes to the rotation weights (TermHessian); only cross-body and
+// position–rotation products are written as blocks.
 struct HessianRows {
   const Eigen::Ref<const Eigen::VectorXd>& w;
-  Term::Matrix7d* Haa;
-  Term::Matrix7d* Hab;
-  Term::Matrix7d* Hbb;
+  TermHessian* h;
   int row = 0;
 
-  static Eigen::Vector4d Q(const std::vector<BodyPose>& poses, int body) {
-    return poses[static_cast<size_t>(body)].q.tail<4>();
-  }
   // Σ w_k (P_a − P_b)_k: only the rotations curve.
-  void Coincide(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b) {
+  void Coincide(const std::vector<BodyPose>&, const Attachment& a, const Attachment& b) {
     const Eigen::Vector3d y = w.segment<3>(row);
-    Haa->block<4, 4>(3, 3) += contact::RotateHessian(Q(poses, a.body), a.point, y);
-    Hbb->block<4, 4>(3, 3) -= contact::RotateHessian(Q(poses, b.body), b.point, y);
+    h->W_a.noalias() += y * a.point.transpose();
+    h->W_b.noalias() -= y * b.point.transpose();
     row += 3;
   }
   // w (R_a u)·(R_b v).
@@ -111,10 +108,13 @@ struct HessianRows {
     const double wk = w[row++];
     const BodyPose& pa = poses[static_cast<size_t>(ba)];
     const BodyPose& pb = poses[static_cast<size_t>(bb)];
-    Haa->block<4, 4>(3, 3) += contact::RotateHessian(pa.q.tail<4>(), u, wk * (pb.R * v));
-    Hbb->block<4, 4>(3, 3) += contact::RotateHessian(pb.q.tail<4>(), v, wk * (pa.R * u));
-    Hab->block<4, 4>(3, 3) += wk * contact::RotateDerivative(pa.q.tail<4>(), u).transpose() *
-                              contact::RotateDerivative(pb.q.tail<4>(), v);
+    const Eigen::Vector3d U = pa.R * u, V = pb.R * v;
+    h->W_a.noalias() += (wk * V) * u.transpose();
+    h->W_b.noalias() += (wk * U) * v.transpose();
+    // ∂U/∂Q_a = −[U]× Ω_a, ∂V/∂Q_b = −[V]× Ω_b.
+    h->ab.block<4, 4>(3, 3).noalias() += wk * pa.omega_map.transpose() *
+                                         (contact::Skew(U).transpose() * contact::Skew(V)) *
+                                         pb.omega_map;
   }
   // w (P_b − P_a)·E_a with E_a = R_a e.
   void Offset(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b,
@@ -127,11 +127,10 @@ struct HessianRows {
     const Matrix37 JPa = contact::PointJacobian(pa, a.point);
     const Matrix37 JPb = contact::PointJacobian(pb, b.point);
     const Matrix37 JE = contact::DirectionJacobian(pa, e);
-    *Haa -= wk * (JE.transpose() * JPa + JPa.transpose() * JE);
-    Haa->block<4, 4>(3, 3) += contact::RotateHessian(pa.q.tail<4>(), e, wk * d) -
-                              contact::RotateHessian(pa.q.tail<4>(), a.point, wk * E);
-    *Hab += wk * JE.transpose() * JPb;
-    Hbb->block<4, 4>(3, 3) += contact::RotateHessian(pb.q.tail<4>(), b.point, wk * E);
+    h->aa.noalias() -= wk * (JE.transpose() * JPa + JPa.transpose() * JE);
+    h->W_a.noalias() += (wk * d) * e.transpose() - (wk * E) * a.point.transpose();
+    h->ab.noalias() += wk * JE.transpose() * JPb;
+    h->W_b.noalias() += (wk * E) * b.point.transpose();
   }
 };
 
@@ -171,9 +170,9 @@ class Joint final : public Term {
   }
   bool has_hessian() const override { return true; }
   void AddWeightedHessian(const std::vector<BodyPose>& poses,
-                          const Eigen::Ref<const Eigen::VectorXd>& w, Matrix7d* H_aa,
-                          Matrix7d* H_ab, Matrix7d* H_bb) const override {
-    HessianRows rows{w, H_aa, H_ab, H_bb};
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override {
+    HessianRows rows{w, h};
     Visit(poses, &rows);
   }
 
@@ -220,8 +219,8 @@ class UnitQuaternionTerm final : public Term {
   }
   bool has_hessian() const override { return true; }
   void AddWeightedHessian(const std::vector<BodyPose>&, const Eigen::Ref<const Eigen::VectorXd>& w,
-                          Matrix7d* H_aa, Matrix7d*, Matrix7d*) const override {
-    H_aa->block<4, 4>(3, 3) += 2.0 * w[0] * Eigen::Matrix4d::Identity();
+                          TermHessian* h) const override {
+    h->aa.block<4, 4>(3, 3).diagonal().array() += 2.0 * w[0];
   }
 
  private:

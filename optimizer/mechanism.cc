@@ -44,17 +44,28 @@ void Mechanism::Poses(const Eigen::VectorXd& q, std::vector<BodyPose>* poses) co
   }
 }
 
-void Mechanism::Metric(const Eigen::VectorXd& q, Eigen::MatrixXd* M) const {
-  M->setZero(num_coordinates(), num_coordinates());
+void Mechanism::MetricBlocks(const Eigen::VectorXd& q,
+                             std::vector<Eigen::Matrix<double, 7, 7>>* blocks) const {
+  blocks->resize(static_cast<size_t>(num_moving()));
   for (int i = 0; i < num_bodies(); ++i) {
     const int o = offset(i);
     if (o < 0) continue;
     const Body& b = body(i);
     const Eigen::Vector4d Q = q.segment<4>(o + 3);
     const contact::Matrix34d G = contact::GBody(Q / Q.norm()) / Q.norm();
-    M->block<3, 3>(o, o) = b.rigidity * b.mass * Eigen::Matrix3d::Identity();
-    M->block<4, 4>(o + 3, o + 3) = b.rigidity * G.transpose() * b.inertia * G;
+    Eigen::Matrix<double, 7, 7>& m = (*blocks)[static_cast<size_t>(o / 7)];
+    m.setZero();
+    m.topLeftCorner<3, 3>().diagonal().setConstant(b.rigidity * b.mass);
+    m.bottomRightCorner<4, 4>().noalias() = b.rigidity * G.transpose() * b.inertia * G;
   }
+}
+
+void Mechanism::Metric(const Eigen::VectorXd& q, Eigen::MatrixXd* M) const {
+  std::vector<Eigen::Matrix<double, 7, 7>> blocks;
+  MetricBlocks(q, &blocks);
+  M->setZero(num_coordinates(), num_coordinates());
+  for (int k = 0; k < num_moving(); ++k)
+    M->block<7, 7>(7 * k, 7 * k) = blocks[static_cast<size_t>(k)];
 }
 
 }  // namespace tangent::optimizer

@@ -47,6 +47,10 @@ class Mechanism {
   /// Kinetic-energy metric diagonal blocks (7 x 7 per moving body, rigidity applied), for
   /// ½ q̇ᵀ M q̇ = Σ ½ m |ṗ|² + ½ w_Bᵀ I_B w_B with w_B = G(Q) Q̇ at q.
   void Metric(const Eigen::VectorXd& q, Eigen::MatrixXd* M) const;
+  /// The same metric as one 7 x 7 block per moving body (in coordinate order). Allocation free
+  /// when *blocks already has num_moving() entries.
+  void MetricBlocks(const Eigen::VectorXd& q,
+                    std::vector<Eigen::Matrix<double, 7, 7>>* blocks) const;
 
  private:
   std::vector<Body> bodies_;

@@ -1,7 +1,10 @@
 #pragma once
 
+#include <memory>
+
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/SparseCholesky>
 
 #include "optimizer/evaluator.h"
 #include "optimizer/problem.h"
@@ -21,10 +24,16 @@ struct SolverOptions {
   /// Levenberg–Marquardt damping added to the Newton matrix, relative to the largest diagonal
   /// entry of its objective part (least astonishment and objective terms).
   double damping = 1e-12;
+  /// Linear algebra of the Newton step: dense LLᵀ for small systems, sparse LDLᵀ (Eigen's
+  /// SimplicialLDLT, symbolic analysis done once per constraint structure) for large ones;
+  /// kAuto picks sparse above `sparse_threshold` coordinates.
+  enum class Linear { kAuto, kDense, kSparse };
+  Linear linear = Linear::kAuto;
+  int sparse_threshold = 84;  ///< coordinates (12 moving bodies)
 };
 
 struct SolveStats {
-  int iterations = 0;
+  int iterations = 0;  ///< Newton iterations
   double max_violation = 0.0;
   double kkt_residual = 0.0;
   double objective = 0.0;
@@ -56,6 +65,7 @@ class Solver {
   void Reset();
   const Eigen::VectorXd& equality_multipliers() const { return lambda_e_; }
   const Eigen::VectorXd& inequality_multipliers() const { return lambda_i_; }
+  bool sparse() const { return H_.is_sparse(); }
 
  private:
   void AugmentedGradient();
@@ -64,15 +74,20 @@ class Solver {
   double Violation() const;
   void Normalize(Eigen::VectorXd* q) const;
 
+  bool Factorize();
+  void SolveStep();
+
   const Problem& problem_;
   SolverOptions options_;
   int n_ = 0;
   ProblemEvaluator ev_;
+  BlockMatrix H_;
+  std::vector<Matrix7d> M_;
   Eigen::VectorXd q_prev_, lambda_e_, lambda_i_, g_, step_, q_try_, shifted_;
-  Eigen::MatrixXd M_, H_;
-  Eigen::VectorXd weights_, kkt_, grad_e_, linearized_e_,
-      linearized_i_;  // per-term row weights for the second-derivative terms
-  Eigen::LDLT<Eigen::MatrixXd> ldlt_;
+  Eigen::VectorXd weights_, gn_e_, gn_i_, gn_o_, kkt_, grad_e_, linearized_e_, linearized_i_,
+      jstep_e_, jstep_i_;
+  Eigen::LLT<Eigen::MatrixXd> llt_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   double mu_ = 0.0;
 };
 

@@ -10,6 +10,28 @@
 
 namespace tangent::optimizer {
 
+using Matrix7d = Eigen::Matrix<double, 7, 7>;
+
+/// The second derivatives a term adds for its bodies a and b: 7 x 7 blocks (rows a, columns b
+/// for ab) and, for the curvature of rotated body vectors, rotation weights: a term whose value
+/// contains yᵀ R_a v adds y vᵀ to W_a instead of a 4 x 4 block, and the owner folds each body's
+/// W once with contact::RotateHessianWeighted (the Hessian is linear in y vᵀ), so a joint's
+/// rows cost one fold per body per Newton matrix, not one per row.
+struct TermHessian {
+  Matrix7d aa, ab, bb;
+  Eigen::Matrix3d W_a, W_b;
+  void SetZero() {
+    aa.setZero();
+    ab.setZero();
+    bb.setZero();
+    W_a.setZero();
+    W_b.setZero();
+  }
+  /// Folds W_a and W_b into aa and bb (Q_a, Q_b the bodies' quaternion coordinates) and clears
+  /// them.
+  void Fold(const Eigen::Vector4d& Q_a, const Eigen::Vector4d& Q_b);
+};
+
 /// A smooth vector function r(q) of the poses of at most two bodies, with its Jacobian in two
 /// 7-column blocks (one per body; a fixed body's block is ignored). Joints, limits and goals
 /// are all terms; a Problem decides whether a term is an equality (r = 0), an inequality
@@ -26,15 +48,13 @@ class Term {
   virtual void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
                         Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const = 0;
 
-  using Matrix7d = Eigen::Matrix<double, 7, 7>;
-  /// Adds Σ_i w_i ∇²r_i, the rows' second derivatives weighted by w (dim), to the blocks
-  /// H_aa, H_ab (rows a, columns b) and H_bb. A term that returns false from has_hessian() adds
-  /// nothing: its curvature is then missing from the solver's Newton matrix (Gauss–Newton).
+  /// Adds Σ_i w_i ∇²r_i, the rows' second derivatives weighted by w (dim), to *h. A term that
+  /// returns false from has_hessian() adds nothing: its curvature is then missing from the
+  /// solver's Newton matrix (Gauss–Newton).
   virtual bool has_hessian() const { return false; }
   virtual void AddWeightedHessian(const std::vector<BodyPose>& /*poses*/,
                                   const Eigen::Ref<const Eigen::VectorXd>& /*w*/,
-                                  Matrix7d* /*H_aa*/, Matrix7d* /*H_ab*/,
-                                  Matrix7d* /*H_bb*/) const {}
+                                  TermHessian* /*h*/) const {}
 };
 
 using TermPtr = std::shared_ptr<const Term>;

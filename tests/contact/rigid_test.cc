@@ -76,6 +76,21 @@ TEST(RigidTest, RotateHessianMatchesFiniteDifferences) {
   }
 }
 
+TEST(RigidTest, WeightedRotateHessianIsTheSumOfItsOuterProducts) {
+  std::mt19937_64 rng(5);
+  for (int k = 0; k < 10; ++k) {
+    const Eigen::Vector4d Q = 1.3 * RandomUnitQuaternion(rng);
+    Eigen::Matrix3d W = Eigen::Matrix3d::Zero();
+    Eigen::Matrix4d sum = Eigen::Matrix4d::Zero();
+    for (int j = 0; j < 3; ++j) {
+      const Eigen::Vector3d v = Eigen::Vector3d::Random(), y = Eigen::Vector3d::Random();
+      W += y * v.transpose();
+      sum += RotateHessian(Q, v, y);
+    }
+    EXPECT_LT((RotateHessianWeighted(Q, W) - sum).norm(), 1e-13);
+  }
+}
+
 TEST(RigidTest, GBodyGivesBodyAngularVelocityAndTorqueMapConservesPower) {
   std::mt19937_64 rng(3);
   for (int k = 0; k < 20; ++k) {

@@ -90,9 +90,13 @@ void CheckHessian(const Fixture& f, const Term& term, std::mt19937_64& rng) {
     for (int i = 0; i < m; ++i) w[i] = g(rng);
     std::vector<BodyPose> poses;
     f.mech.Poses(q, &poses);
-    Term::Matrix7d Haa = Term::Matrix7d::Zero(), Hab = Term::Matrix7d::Zero(),
-                   Hbb = Term::Matrix7d::Zero();
-    term.AddWeightedHessian(poses, w, &Haa, &Hab, &Hbb);
+    TermHessian h;
+    h.SetZero();
+    term.AddWeightedHessian(poses, w, &h);
+    const int b = term.body_b() >= 0 ? term.body_b() : term.body_a();
+    h.Fold(poses[static_cast<size_t>(term.body_a())].q.tail<4>(),
+           poses[static_cast<size_t>(b)].q.tail<4>());
+    const Matrix7d &Haa = h.aa, &Hab = h.ab, &Hbb = h.bb;
     auto weighted_gradient = [&](const Eigen::VectorXd& x, Eigen::Matrix<double, 7, 1>* ga,
                                  Eigen::Matrix<double, 7, 1>* gb) {
       std::vector<BodyPose> p;
