@@ -1,0 +1,190 @@
+#include "optimizer/contacts.h"
+
+#include <stdexcept>
+
+#include "contact/contact_jacobian.h"
+#include "contact/rigid.h"
+
+namespace tangent::optimizer {
+
+namespace {
+
+using Matrix37 = Eigen::Matrix<double, 3, 7>;
+using Matrix14 = Eigen::Matrix<double, 14, 14>;
+
+// Derivative of the unit normal n = N/|N| along a parameter, from N's partial N_a.
+Eigen::Vector3d UnitNormalPartial(const Eigen::Vector3d& N, const Eigen::Vector3d& N_a) {
+  const double len = N.norm();
+  const Eigen::Vector3d n = N / len;
+  return (N_a - n * n.dot(N_a)) / len;
+}
+
+void Split(const Matrix14& H, double w, TermHessian* h) {
+  const Matrix14 S = 0.5 * w * (H + H.transpose());
+  h->aa += S.topLeftCorner<7, 7>();
+  h->ab += S.topRightCorner<7, 7>();
+  h->bb += S.bottomRightCorner<7, 7>();
+}
+
+bool SamePose(const Vector7d& a, const Vector7d& b) { return (a.array() == b.array()).all(); }
+
+}  // namespace
+
+// ---- Surface–surface -----------------------------------------------------------------------
+
+SurfaceContactTerm::SurfaceContactTerm(int body_f, const nurbs::NurbsSurface* f, int body_g,
+                                       const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed)
+    : body_f_(body_f), body_g_(body_g), f_(f), g_(g), u_(seed) {
+  if (!f || !g) throw std::invalid_argument("surface contact: null surface");
+  if (body_f == body_g) throw std::invalid_argument("surface contact: both surfaces on one body");
+  if (!seed.allFinite()) throw std::invalid_argument("surface contact: non-finite seed");
+}
+
+void SurfaceContactTerm::Reseed(const Eigen::Vector4d& u) const {
+  u_ = u;
+  valid_ = false;
+}
+
+void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses) const {
+  const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
+  const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
+  if (valid_ && SamePose(pf.q, q_f_) && SamePose(pg.q, q_g_)) return;
+  ext_ = contact::SolveSurfaceSurface(*f_, pf, *g_, pg, u_);
+  u_ = ext_.u;
+  q_f_ = pf.q;
+  q_g_ = pg.q;
+  contact::EvaluatePair(*f_, pf, *g_, pg, u_, &hint_f_, &hint_g_, &eval_, false);
+  valid_ = true;
+}
+
+void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses,
+                                  Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                                  Eigen::Ref<Eigen::MatrixXd> J_b) const {
+  Update(poses);
+  const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
+  const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
+  const Eigen::Vector3d n = eval_.g.N.normalized();
+  r[0] = eval_.d.dot(n);
+  J_a = n.transpose() * contact::PointJacobian(pf, eval_.f.body.S);
+  J_b = -n.transpose() * contact::PointJacobian(pg, eval_.g.body.S);
+}
+
+void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses,
+                                            const Eigen::Ref<const Eigen::VectorXd>& w,
+                                            TermHessian* h) const {
+  Update(poses);
+  const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
+  const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
+  const Eigen::Vector3d n = eval_.g.N.normalized();
+  contact::Matrix4x14 u_q;
+  const bool regular = contact::ContactJacobianClosedForm(eval_, pf, pg, &u_q);
+  if (!regular) u_q.setZero();
+  // P = ∂(f − g)/∂q at fixed parameters.
+  Eigen::Matrix<double, 3, 14> P;
+  P << contact::PointJacobian(pf, eval_.f.body.S), -contact::PointJacobian(pg, eval_.g.body.S);
+  // n_q: rotation of G and the change of (s, t).
+  Eigen::Matrix<double, 3, 14> n_q = Eigen::Matrix<double, 3, 14>::Zero();
+  n_q.rightCols<7>() = contact::DirectionJacobian(pg, pg.R.transpose() * n);
+  n_q += UnitNormalPartial(eval_.g.N, eval_.g.N_u) * u_q.row(2) +
+         UnitNormalPartial(eval_.g.N, eval_.g.N_v) * u_q.row(3);
+  Matrix14 H = P.transpose() * n_q;
+  // n·∂P/∂u u_q: the points' Jacobians change with the parameters.
+  Eigen::Matrix<double, 2, 14> V_f = Eigen::Matrix<double, 2, 14>::Zero(),
+                               V_g = Eigen::Matrix<double, 2, 14>::Zero();
+  V_f.block<1, 7>(0, 0) = n.transpose() * contact::DirectionJacobian(pf, eval_.f.body.S_u);
+  V_f.block<1, 7>(1, 0) = n.transpose() * contact::DirectionJacobian(pf, eval_.f.body.S_v);
+  V_g.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(pg, eval_.g.body.S_u);
+  V_g.block<1, 7>(1, 7) = n.transpose() * contact::DirectionJacobian(pg, eval_.g.body.S_v);
+  H.noalias() += V_f.transpose() * u_q.topRows<2>() - V_g.transpose() * u_q.bottomRows<2>();
+  Split(H, w[0], h);
+  // n·∂²(f − g)/∂q² at fixed parameters: the rotations' curvature.
+  h->W_a.noalias() += (w[0] * n) * eval_.f.body.S.transpose();
+  h->W_b.noalias() -= (w[0] * n) * eval_.g.body.S.transpose();
+}
+
+// ---- Point on surface ----------------------------------------------------------------------
+
+PointOnSurfaceTerm::PointOnSurfaceTerm(const Attachment& point, int body_s,
+                                       const nurbs::NurbsSurface* surface,
+                                       const Eigen::Vector2d& seed)
+    : point_(point), body_s_(body_s), s_(surface), u_(seed) {
+  if (!surface) throw std::invalid_argument("point on surface: null surface");
+  if (point.body == body_s) throw std::invalid_argument("point on surface: point on the surface's body");
+  if (!seed.allFinite()) throw std::invalid_argument("point on surface: non-finite seed");
+}
+
+void PointOnSurfaceTerm::Update(const std::vector<BodyPose>& poses) const {
+  const BodyPose& pa = poses[static_cast<size_t>(point_.body)];
+  const BodyPose& ps = poses[static_cast<size_t>(body_s_)];
+  if (valid_ && SamePose(pa.q, q_a_) && SamePose(ps.q, q_s_)) return;
+  ext_ = contact::SolvePointSurface(pa.Point(point_.point), *s_, ps, u_);
+  u_ = ext_.u;
+  q_a_ = pa.q;
+  q_s_ = ps.q;
+  contact::EvaluatePlaced(*s_, ps, u_[0], u_[1], &hint_, &eval_);
+  valid_ = true;
+}
+
+void PointOnSurfaceTerm::Evaluate(const std::vector<BodyPose>& poses,
+                                  Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                                  Eigen::Ref<Eigen::MatrixXd> J_b) const {
+  Update(poses);
+  const BodyPose& pa = poses[static_cast<size_t>(point_.body)];
+  const BodyPose& ps = poses[static_cast<size_t>(body_s_)];
+  const Eigen::Vector3d n = eval_.N.normalized();
+  r[0] = (pa.Point(point_.point) - eval_.world.S).dot(n);
+  J_a = n.transpose() * contact::PointJacobian(pa, point_.point);
+  J_b = -n.transpose() * contact::PointJacobian(ps, eval_.body.S);
+}
+
+void PointOnSurfaceTerm::AddWeightedHessian(const std::vector<BodyPose>& poses,
+                                            const Eigen::Ref<const Eigen::VectorXd>& w,
+                                            TermHessian* h) const {
+  Update(poses);
+  const BodyPose& pa = poses[static_cast<size_t>(point_.body)];
+  const BodyPose& ps = poses[static_cast<size_t>(body_s_)];
+  const nurbs::SurfacePoint& b = eval_.body;
+  const nurbs::SurfacePoint& s = eval_.world;
+  const Eigen::Vector3d n = eval_.N.normalized();
+  const Eigen::Vector3d d = pa.Point(point_.point) - s.S;
+  Eigen::Matrix<double, 3, 14> P;
+  P << contact::PointJacobian(pa, point_.point), -contact::PointJacobian(ps, b.S);
+  // u_q from F = [d·S_u, d·S_v] = 0: F_u u_q = −F_q.
+  Eigen::Matrix2d F_u;
+  F_u << -s.S_u.dot(s.S_u) + d.dot(ps.R * b.S_uu), -s.S_u.dot(s.S_v) + d.dot(ps.R * b.S_uv),
+      -s.S_v.dot(s.S_u) + d.dot(ps.R * b.S_uv), -s.S_v.dot(s.S_v) + d.dot(ps.R * b.S_vv);
+  Eigen::Matrix<double, 2, 14> F_q;
+  F_q.row(0) = s.S_u.transpose() * P;
+  F_q.row(1) = s.S_v.transpose() * P;
+  F_q.block<1, 7>(0, 7) += d.transpose() * contact::DirectionJacobian(ps, b.S_u);
+  F_q.block<1, 7>(1, 7) += d.transpose() * contact::DirectionJacobian(ps, b.S_v);
+  Eigen::Matrix<double, 2, 14> u_q = Eigen::Matrix<double, 2, 14>::Zero();
+  const double det = F_u.determinant();
+  if (std::abs(det) > 1e-12 * F_u.squaredNorm()) u_q = -F_u.inverse() * F_q;
+  Eigen::Matrix<double, 3, 14> n_q = Eigen::Matrix<double, 3, 14>::Zero();
+  n_q.rightCols<7>() = contact::DirectionJacobian(ps, ps.R.transpose() * n);
+  n_q += UnitNormalPartial(eval_.N, eval_.N_u) * u_q.row(0) +
+         UnitNormalPartial(eval_.N, eval_.N_v) * u_q.row(1);
+  Matrix14 H = P.transpose() * n_q;
+  Eigen::Matrix<double, 2, 14> V = Eigen::Matrix<double, 2, 14>::Zero();
+  V.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(ps, b.S_u);
+  V.block<1, 7>(1, 7) = n.transpose() * contact::DirectionJacobian(ps, b.S_v);
+  H.noalias() -= V.transpose() * u_q;
+  Split(H, w[0], h);
+  h->W_a.noalias() += (w[0] * n) * point_.point.transpose();
+  h->W_b.noalias() -= (w[0] * n) * b.S.transpose();
+}
+
+std::shared_ptr<SurfaceContactTerm> MakeSurfaceContact(int body_f, const nurbs::NurbsSurface* f,
+                                                       int body_g, const nurbs::NurbsSurface* g,
+                                                       const Eigen::Vector4d& seed) {
+  return std::make_shared<SurfaceContactTerm>(body_f, f, body_g, g, seed);
+}
+
+std::shared_ptr<PointOnSurfaceTerm> MakePointOnSurface(const Attachment& point, int body_s,
+                                                       const nurbs::NurbsSurface* surface,
+                                                       const Eigen::Vector2d& seed) {
+  return std::make_shared<PointOnSurfaceTerm>(point, body_s, surface, seed);
+}
+
+}  // namespace tangent::optimizer

@@ -1,0 +1,105 @@
+#pragma once
+
+#include <memory>
+
+#include "contact/extremal.h"
+#include "optimizer/joints.h"
+#include "optimizer/term.h"
+
+namespace tangent::optimizer {
+
+/// The signed distance β between a surface f on body a and a surface g on body b at their
+/// extremal pair (seed 001 §3.3, design.md §4.1–4.2), one row: as an equality it is the
+/// "floating contact" β = 0 (the surfaces touch and may roll and slide), as an inequality
+/// non-penetration β ≥ 0.
+///
+/// The pair's parameters (u, v, s, t) are tracked inside the term: each evaluation at new poses
+/// runs the extremal Newton solver from the last parameters (contact::SolveSurfaceSurface,
+/// allocation free), so the parameters follow the motion and β is exact to the solver's
+/// tolerance. Derivatives (docs/optimizer.md "Contact terms"):
+///   ∇β = n_gᵀ (∂f/∂q − ∂g/∂q)|_u            (the u-terms vanish at an extremum),
+///   ∇²β = Pᵀ n_q + n·∂²(f − g)/∂q²|_u + V_fᵀ u_q^f − V_gᵀ u_q^g,
+/// with P = ∂(f − g)/∂q|_u, n_q the total derivative of the unit normal of g (its rotation and
+/// its change with (s, t)), V the normal component of ∂P/∂u and u_q the closed-form contact
+/// Jacobian (contact::ContactJacobianClosedForm). Where u_q is singular the u-terms are dropped
+/// (Gauss–Newton in those directions).
+///
+/// Not thread safe: the tracked parameters are mutable state of the term, as the tracker's are.
+class SurfaceContactTerm final : public Term {
+ public:
+  /// The surfaces must outlive the term. `seed`: (u, v, s, t) near the extremum to follow.
+  SurfaceContactTerm(int body_f, const nurbs::NurbsSurface* f, int body_g,
+                     const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed);
+
+  std::string name() const override { return "surface_contact"; }
+  int dim() const override { return 1; }
+  int body_a() const override { return body_f_; }
+  int body_b() const override { return body_g_; }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
+  bool has_hessian() const override { return true; }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override;
+
+  /// The extremum at the last evaluated poses (parameters, β, points, status).
+  const contact::SurfaceSurfaceExtremum& extremum() const { return ext_; }
+  /// Restarts tracking from new parameters (after a global contact search).
+  void Reseed(const Eigen::Vector4d& u) const;
+
+ private:
+  void Update(const std::vector<BodyPose>& poses) const;
+
+  int body_f_, body_g_;
+  const nurbs::NurbsSurface* f_;
+  const nurbs::NurbsSurface* g_;
+  mutable Eigen::Vector4d u_;
+  mutable Vector7d q_f_, q_g_;
+  mutable bool valid_ = false;
+  mutable contact::SurfaceSurfaceExtremum ext_;
+  mutable contact::SurfacePairEval eval_;
+  mutable nurbs::SpanHint hint_f_, hint_g_;
+};
+
+/// The signed distance from a point on body a (attachment point) to a surface on body b at the
+/// closest point, (x − S)·n_S, one row: "point on surface" as an equality, "point above the
+/// surface" as an inequality. Tracked and differentiated like SurfaceContactTerm.
+class PointOnSurfaceTerm final : public Term {
+ public:
+  PointOnSurfaceTerm(const Attachment& point, int body_s, const nurbs::NurbsSurface* surface,
+                     const Eigen::Vector2d& seed);
+
+  std::string name() const override { return "point_on_surface"; }
+  int dim() const override { return 1; }
+  int body_a() const override { return point_.body; }
+  int body_b() const override { return body_s_; }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
+  bool has_hessian() const override { return true; }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override;
+  const contact::PointSurfaceExtremum& extremum() const { return ext_; }
+
+ private:
+  void Update(const std::vector<BodyPose>& poses) const;
+
+  Attachment point_;
+  int body_s_;
+  const nurbs::NurbsSurface* s_;
+  mutable Eigen::Vector2d u_;
+  mutable Vector7d q_a_, q_s_;
+  mutable bool valid_ = false;
+  mutable contact::PointSurfaceExtremum ext_;
+  mutable contact::PlacedSurfacePoint eval_;
+  mutable nurbs::SpanHint hint_;
+};
+
+std::shared_ptr<SurfaceContactTerm> MakeSurfaceContact(int body_f, const nurbs::NurbsSurface* f,
+                                                       int body_g, const nurbs::NurbsSurface* g,
+                                                       const Eigen::Vector4d& seed);
+std::shared_ptr<PointOnSurfaceTerm> MakePointOnSurface(const Attachment& point, int body_s,
+                                                       const nurbs::NurbsSurface* surface,
+                                                       const Eigen::Vector2d& seed);
+
+}  // namespace tangent::optimizer

@@ -1,0 +1,171 @@
+// Surface–surface contact and point-on-surface terms: β and its analytic Jacobian and weighted
+// Hessian (through the tracked extremal parameters and the closed-form u_q) against central
+// finite differences, at seeded random poses near contact, quaternions off the unit sphere.
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "nurbs/primitives.h"
+#include "optimizer/contacts.h"
+
+namespace tangent::optimizer {
+namespace {
+
+constexpr double kH = 1e-6;
+
+struct Scene {
+  Mechanism mech;
+  int a, b;
+  nurbs::NurbsSurface sphere = nurbs::MakeSphere({0, 0, 0}, 0.05);
+  nurbs::NurbsSurface patch = nurbs::MakeShearedPatch(0.3, 0.2, 0.01, true);
+  Scene() {
+    a = mech.AddBody(Body{"ball"});
+    b = mech.AddBody(Body{"patch"});
+  }
+};
+
+// Poses: the patch near the identity, the ball's centre `gap` + radius above the patch middle
+// (so β ≈ gap), both perturbed; quaternions scaled off the unit sphere.
+Eigen::VectorXd NearContact(const Scene& s, double gap, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const nurbs::SurfacePoint mid = s.patch.Evaluate(0.5, 0.5, 1);
+  const Eigen::Vector3d normal = mid.S_u.cross(mid.S_v).normalized();
+  Eigen::VectorXd q(14);
+  const Eigen::Quaterniond qa = Eigen::Quaterniond(1, 0.3 * u(rng), 0.3 * u(rng), 0.3 * u(rng));
+  const Eigen::Quaterniond qb = Eigen::Quaterniond(1, 0.02 * u(rng), 0.02 * u(rng), 0.02 * u(rng));
+  const Eigen::Vector3d pb(0.002 * u(rng), 0.002 * u(rng), 0.002 * u(rng));
+  const Eigen::Vector3d pa = pb + qb.normalized() * (mid.S + (0.05 + gap) * normal) +
+                             Eigen::Vector3d(0.01 * u(rng), 0.01 * u(rng), 0.0);
+  q << pa, 1.2 * qa.coeffs()[3], 1.2 * qa.x(), 1.2 * qa.y(), 1.2 * qa.z(), pb, 0.9 * qb.w(),
+      0.9 * qb.x(), 0.9 * qb.y(), 0.9 * qb.z();
+  return q;
+}
+
+// Seed by dense sampling of both surfaces (the nearest sample pair).
+Eigen::Vector4d BruteForceSeed(const Scene& s, const std::vector<BodyPose>& poses) {
+  const int n = 24;
+  std::vector<Eigen::Vector3d> fa, gb;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const double x = (i + 0.5) / n, y = (j + 0.5) / n;
+      fa.push_back(poses[static_cast<size_t>(s.a)].Point(s.sphere.Evaluate(x, y, 0).S));
+      gb.push_back(poses[static_cast<size_t>(s.b)].Point(s.patch.Evaluate(x, y, 0).S));
+    }
+  }
+  double best = 1e300;
+  Eigen::Vector4d seed;
+  for (size_t i = 0; i < fa.size(); ++i) {
+    for (size_t j = 0; j < gb.size(); ++j) {
+      const double d = (fa[i] - gb[j]).squaredNorm();
+      if (d < best) {
+        best = d;
+        seed << (static_cast<int>(i) / n + 0.5) / n, (static_cast<int>(i) % n + 0.5) / n,
+            (static_cast<int>(j) / n + 0.5) / n, (static_cast<int>(j) % n + 0.5) / n;
+      }
+    }
+  }
+  return seed;
+}
+
+// β and ∇β at q through a term (which tracks from its last parameters).
+double Value(const Mechanism& m, const Term& t, const Eigen::VectorXd& q,
+             Eigen::Matrix<double, 1, 14>* grad) {
+  std::vector<BodyPose> poses;
+  m.Poses(q, &poses);
+  Eigen::VectorXd r(1);
+  Eigen::MatrixXd Ja(1, 7), Jb(1, 7);
+  t.Evaluate(poses, r, Ja, Jb);
+  if (grad) *grad << Ja, Jb;
+  return r[0];
+}
+
+void CheckDerivatives(const Mechanism& m, const Term& t, const Eigen::VectorXd& q, double tol_j,
+                      double tol_h) {
+  Eigen::Matrix<double, 1, 14> g;
+  Value(m, t, q, &g);
+  std::vector<BodyPose> poses;
+  m.Poses(q, &poses);
+  const double w = 0.7;
+  TermHessian h;
+  h.SetZero();
+  t.AddWeightedHessian(poses, Eigen::VectorXd::Constant(1, w), &h);
+  h.Fold(q.segment<4>(3), q.segment<4>(10));
+  Eigen::Matrix<double, 14, 14> H;
+  H << h.aa, h.ab, h.ab.transpose(), h.bb;
+  for (int k = 0; k < 14; ++k) {
+    Eigen::VectorXd qp = q, qm = q;
+    qp[k] += kH;
+    qm[k] -= kH;
+    Eigen::Matrix<double, 1, 14> gp, gm;
+    const double fp = Value(m, t, qp, &gp), fm = Value(m, t, qm, &gm);
+    EXPECT_NEAR((fp - fm) / (2 * kH), g[k], tol_j) << t.name() << " coordinate " << k;
+    const Eigen::Matrix<double, 1, 14> fd = w * (gp - gm) / (2 * kH);
+    EXPECT_LT((fd - H.row(k)).cwiseAbs().maxCoeff(), tol_h) << t.name() << " Hessian row " << k;
+  }
+  Value(m, t, q, nullptr);  // Leave the term at q.
+}
+
+TEST(ContactTermsTest, SurfaceContactDerivativesMatchFiniteDifferences) {
+  Scene s;
+  std::mt19937_64 rng(41);
+  for (double gap : {0.0, 0.004, -0.002}) {  // touching, apart, interpenetrating
+    for (int trial = 0; trial < 4; ++trial) {
+      const Eigen::VectorXd q = NearContact(s, gap, rng);
+      std::vector<BodyPose> poses;
+      s.mech.Poses(q, &poses);
+      const auto term = MakeSurfaceContact(s.a, &s.sphere, s.b, &s.patch, BruteForceSeed(s, poses));
+      const double beta = Value(s.mech, *term, q, nullptr);
+      ASSERT_EQ(term->extremum().status, contact::ExtremalStatus::kConverged);
+      EXPECT_NEAR(beta, gap, 0.015);  // the bump and the offsets move it by millimetres
+      CheckDerivatives(s.mech, *term, q, 1e-8, 2e-6);
+    }
+  }
+}
+
+TEST(ContactTermsTest, PointOnSurfaceDerivativesMatchFiniteDifferences) {
+  Scene s;
+  std::mt19937_64 rng(42);
+  for (double gap : {0.0, 0.01, -0.003}) {
+    for (int trial = 0; trial < 4; ++trial) {
+      const Eigen::VectorXd q = NearContact(s, gap, rng);
+      // The ball's attachment point: its point nearest the patch (gap above it).
+      std::vector<BodyPose> poses;
+      s.mech.Poses(q, &poses);
+      const nurbs::SurfacePoint mid = s.patch.Evaluate(0.5, 0.5, 1);
+      const Eigen::Vector3d n_W = poses[static_cast<size_t>(s.b)].R * mid.S_u.cross(mid.S_v).normalized();
+      const BodyPose& ball = poses[static_cast<size_t>(s.a)];
+      const Eigen::Vector3d low_W = ball.q.head<3>() - 0.05 * n_W;
+      const Attachment at{s.a, ball.R.transpose() * (low_W - ball.q.head<3>())};
+      const auto term = MakePointOnSurface(at, s.b, &s.patch, {0.5, 0.5});
+      Value(s.mech, *term, q, nullptr);
+      ASSERT_EQ(term->extremum().status, contact::ExtremalStatus::kConverged);
+      CheckDerivatives(s.mech, *term, q, 1e-8, 2e-6);
+    }
+  }
+}
+
+TEST(ContactTermsTest, BadInputIsRejectedWithAMessage) {
+  Scene s;
+  try {
+    MakeSurfaceContact(s.a, &s.sphere, s.a, &s.patch, {0.5, 0.5, 0.5, 0.5});
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "surface contact: both surfaces on one body");
+  }
+  try {
+    MakeSurfaceContact(s.a, nullptr, s.b, &s.patch, {0.5, 0.5, 0.5, 0.5});
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "surface contact: null surface");
+  }
+  try {
+    MakePointOnSurface({s.a, {0, 0, 0}}, s.b, &s.patch, {std::nan(""), 0.5});
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "point on surface: non-finite seed");
+  }
+}
+
+}  // namespace
+}  // namespace tangent::optimizer
