@@ -70,7 +70,30 @@ template <int N>
 struct BoxNewtonOptions {
   int max_iterations = 40;
   double step_tolerance = 1e-13;  ///< on each step component divided by its domain width
+  /// Parameters of closed (periodic) directions: they wrap around the domain instead of
+  /// stopping on its edge (a seam is not a boundary).
+  std::array<bool, N> periodic{};
 };
+
+/// x with periodic components wrapped into [lo, hi) and the others clamped to [lo, hi].
+template <int N>
+Eigen::Matrix<double, N, 1> ClampOrWrap(const Eigen::Matrix<double, N, 1>& x,
+                                        const Eigen::Matrix<double, N, 1>& lo,
+                                        const Eigen::Matrix<double, N, 1>& hi,
+                                        const std::array<bool, N>& periodic) {
+  Eigen::Matrix<double, N, 1> y;
+  for (int i = 0; i < N; ++i) {
+    if (periodic[static_cast<size_t>(i)]) {
+      const double w = hi[i] - lo[i];
+      double t = x[i] - lo[i];
+      t -= std::floor(t / w) * w;
+      y[i] = lo[i] + (t < w ? t : 0.0);
+    } else {
+      y[i] = std::min(std::max(x[i], lo[i]), hi[i]);
+    }
+  }
+  return y;
+}
 
 // The system in use: interior equations, or the gradient form with active rows pinned.
 template <int N>
@@ -116,7 +139,8 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
   using Vec = Eigen::Matrix<double, N, 1>;
   using Mat = Eigen::Matrix<double, N, N>;
   BoxNewtonResult<N> res;
-  res.x = x0.cwiseMax(lo).cwiseMin(hi);
+  const auto& periodic = opt.periodic;
+  res.x = ClampOrWrap<N>(x0, lo, hi, periodic);
   const Vec width = (hi - lo).cwiseMax(1e-300);
   NewtonSystem<N> sys;
   eval(res.x, &sys);
@@ -131,6 +155,7 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
     // Longest fraction of the step that stays in the box.
     double alpha = 1.0;
     for (int i = 0; i < N; ++i) {
+      if (periodic[static_cast<size_t>(i)]) continue;
       if (step[i] > 0 && res.x[i] + step[i] > hi[i])
         alpha = std::min(alpha, (hi[i] - res.x[i]) / step[i]);
       if (step[i] < 0 && res.x[i] + step[i] < lo[i])
@@ -142,7 +167,7 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
     NewtonSystem<N> tsys;
     double a_try = alpha;
     for (int k = 0; k < 30; ++k) {
-      trial = (res.x + a_try * step).cwiseMax(lo).cwiseMin(hi);
+      trial = ClampOrWrap<N>(res.x + a_try * step, lo, hi, periodic);
       eval(trial, &tsys);
       Vec rt;
       Mat at;
@@ -155,7 +180,7 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
     // Parameters that reached the boundary while the step pushed outward become active.
     bool hit = false;
     for (int i = 0; i < N; ++i) {
-      if (res.active[static_cast<size_t>(i)]) continue;
+      if (res.active[static_cast<size_t>(i)] || periodic[static_cast<size_t>(i)]) continue;
       if ((res.x[i] <= lo[i] && step[i] < 0) || (res.x[i] >= hi[i] && step[i] > 0)) {
         res.active[static_cast<size_t>(i)] = true;
         hit = true;

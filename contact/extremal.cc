@@ -162,7 +162,9 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   Eigen::Vector4d lo, hi;
   lo << Lo(f), Lo(g);
   hi << Hi(f), Hi(g);
-  const auto r = internal::BoxNewton<4>(eval, seed, lo, hi, Convert<4>(options));
+  auto opt = Convert<4>(options);
+  opt.periodic = {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()};
+  const auto r = internal::BoxNewton<4>(eval, seed, lo, hi, opt);
   EvaluatePair(f, pose_f, g, pose_g, r.x, &hf, &hg, &e);
   SurfaceSurfaceExtremum out;
   out.u = r.x;
@@ -198,7 +200,9 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
     s->J = s->hess;
     s->scale = FirstFormScale(a);
   };
-  const auto r = internal::BoxNewton<2>(eval, seed, Lo(f), Hi(f), Convert<2>(options));
+  auto opt = Convert<2>(options);
+  opt.periodic = {f.periodic_u(), f.periodic_v()};
+  const auto r = internal::BoxNewton<2>(eval, seed, Lo(f), Hi(f), opt);
   internal::NewtonSystem<2> s;
   eval(r.x, &s);
   PointSurfaceExtremum out;
@@ -256,7 +260,9 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
   Eigen::Vector3d lo, hi;
   lo << Lo(f), g.domain_begin();
   hi << Hi(f), g.domain_end();
-  const auto r = internal::BoxNewton<3>(eval, seed, lo, hi, Convert<3>(options));
+  auto opt = Convert<3>(options);
+  opt.periodic = {f.periodic_u(), f.periodic_v(), false};
+  const auto r = internal::BoxNewton<3>(eval, seed, lo, hi, opt);
   EvaluateCurveSurface(f, pose_f, g, pose_g, r.x, &hf, &span_g, &hg, &e);
   CurveSurfaceExtremum out;
   out.u = r.x;

@@ -27,11 +27,12 @@ ContactTracker::ContactTracker(const nurbs::NurbsSurface& f, const nurbs::NurbsS
       g.knots_v().domain_begin();
   hi_ << f.knots_u().domain_end(), f.knots_v().domain_end(), g.knots_u().domain_end(),
       g.knots_v().domain_end();
+  periodic_ = {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()};
 }
 
 TrackStatus ContactTracker::Reset(const Vector7d& q_f, const Vector7d& q_g,
                                   const Eigen::Vector4d& u) {
-  u_ = u.cwiseMax(lo_).cwiseMin(hi_);
+  u_ = internal::ClampOrWrap<4>(u, lo_, hi_, periodic_);
   u_q_.setZero();
   return Evaluate(q_f, q_g, /*correct=*/false);
 }
@@ -49,9 +50,9 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
   q_g_ = q_g;
   bool clamped = false;
   for (int i = 0; i < 4; ++i) {
-    if (u_[i] < lo_[i] || u_[i] > hi_[i]) clamped = true;
+    if (!periodic_[static_cast<size_t>(i)] && (u_[i] < lo_[i] || u_[i] > hi_[i])) clamped = true;
   }
-  u_ = u_.cwiseMax(lo_).cwiseMin(hi_);
+  u_ = internal::ClampOrWrap<4>(u_, lo_, hi_, periodic_);
   const BodyPose pf = BodyPose::FromCoordinates(q_f);
   const BodyPose pg = BodyPose::FromCoordinates(q_g);
   EvaluatePair(f_, pf, g_, pg, u_, &hint_f_, &hint_g_, &eval_, /*gradient_form=*/false);
@@ -90,7 +91,8 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
     bool any = false;
     for (int i = 0; i < 4; ++i) {
       active[static_cast<size_t>(i)] =
-          (u_[i] <= lo_[i] && delta[i] < 0) || (u_[i] >= hi_[i] && delta[i] > 0);
+          !periodic_[static_cast<size_t>(i)] &&
+          ((u_[i] <= lo_[i] && delta[i] < 0) || (u_[i] >= hi_[i] && delta[i] > 0));
       any = any || active[static_cast<size_t>(i)];
     }
     if (any) {
@@ -118,7 +120,7 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
     beta_ += n_g.dot(eval_.f.world.S_u * delta[0] + eval_.f.world.S_v * delta[1] -
                      eval_.g.world.S_u * delta[2] - eval_.g.world.S_v * delta[3]);
     u_ += delta;
-    u_ = u_.cwiseMax(lo_).cwiseMin(hi_);
+    u_ = internal::ClampOrWrap<4>(u_, lo_, hi_, periodic_);
   }
   if (!ContactJacobianClosedForm(eval_, pf, pg, &u_q_)) {
     status_ = TrackStatus::kSingular;

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <array>
+
 #include <Eigen/Core>
 
 #include "contact/contact_jacobian.h"
@@ -57,6 +59,7 @@ class ContactTracker {
   const nurbs::NurbsSurface& g_;
   TrackerOptions options_;
   Eigen::Vector4d lo_, hi_;
+  std::array<bool, 4> periodic_{};
   Vector7d q_f_, q_g_;
   Eigen::Vector4d u_ = Eigen::Vector4d::Zero();
   Matrix4x14 u_q_ = Matrix4x14::Zero();

@@ -264,4 +264,12 @@ NurbsSurface MakeShearedPatch(double angle, double size, double bump, bool ratio
   return NurbsSurface(KnotVector(3, k), KnotVector(3, k), pts, w);
 }
 
+NurbsSurface Transformed(const NurbsSurface& surface, const Eigen::Isometry3d& X) {
+  std::vector<Eigen::Vector4d> cpw = surface.weighted_points();
+  for (Eigen::Vector4d& h : cpw) {
+    h.head<3>() = X.linear() * h.head<3>() + h[3] * X.translation();
+  }
+  return NurbsSurface::FromHomogeneous(surface.knots_u(), surface.knots_v(), std::move(cpw));
+}
+
 }  // namespace tangent::nurbs

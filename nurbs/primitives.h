@@ -3,6 +3,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "nurbs/surface.h"
 
@@ -66,5 +67,9 @@ NurbsSurface MakeHeightGridPatch(double x0, double y0, double lx, double ly,
 /// height `bump` (metres) and, when `rational`, weights varying in [0.95, 1.05]. Size `size`
 /// along both parameter directions; 5 x 5 control points, one interior knot each way.
 NurbsSurface MakeShearedPatch(double angle, double size, double bump, bool rational);
+
+/// The surface moved rigidly by X (points x ↦ X x): NURBS are invariant under affine maps of
+/// their control points, so this is exact (the weights stay). For placing primitives on bodies.
+NurbsSurface Transformed(const NurbsSurface& surface, const Eigen::Isometry3d& X);
 
 }  // namespace tangent::nurbs

@@ -85,6 +85,27 @@ void NurbsSurface::Finish() {
   // A polynomial surface (all weights equal) is stored divided by its weight, so the fast path
   // reads S directly and skips the quotient rule.
   fast_ = internal::BuildSpanForm(*this, rational_ ? 1.0 : 1.0 / cpw_.front()[3]);
+  // Seams: compare both ends at 9 stations across (position to 1e-12 of the net's size, first
+  // derivative to 1e-9 relative).
+  double size = 0.0;
+  for (const Eigen::Vector4d& h : cpw_) size = std::max(size, (h.head<3>() / h[3]).norm());
+  auto seam = [&](bool along_u) {
+    const KnotVector& k = along_u ? knots_u_ : knots_v_;
+    const KnotVector& o = along_u ? knots_v_ : knots_u_;
+    for (int i = 0; i <= 8; ++i) {
+      const double t = o.domain_begin() + (o.domain_end() - o.domain_begin()) * i / 8.0;
+      const SurfacePoint a =
+          along_u ? Evaluate(k.domain_begin(), t, 1) : Evaluate(t, k.domain_begin(), 1);
+      const SurfacePoint b =
+          along_u ? Evaluate(k.domain_end(), t, 1) : Evaluate(t, k.domain_end(), 1);
+      const Eigen::Vector3d da = along_u ? a.S_u : a.S_v, db = along_u ? b.S_u : b.S_v;
+      if ((a.S - b.S).norm() > 1e-12 * (1.0 + size)) return false;
+      if ((da - db).norm() > 1e-9 * (da.norm() + db.norm()) + 1e-14 * (1.0 + size)) return false;
+    }
+    return true;
+  };
+  periodic_u_ = seam(true);
+  periodic_v_ = seam(false);
 }
 
 SurfacePoint NurbsSurface::Evaluate(double u, double v, int order) const {

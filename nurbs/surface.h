@@ -43,6 +43,11 @@ class NurbsSurface {
   double weight(int i, int j) const { return weighted_point(i, j)[3]; }
   /// False when all weights are equal (then the quotient is a constant and S is polynomial).
   bool IsRational() const { return rational_; }
+  /// Closed with continuous first derivatives across the seam (S and S_u at u = begin equal
+  /// those at u = end, sampled along v): the parameter may wrap around (a sphere's longitude,
+  /// the angle around a tube). Periodic in v likewise.
+  bool periodic_u() const { return periodic_u_; }
+  bool periodic_v() const { return periodic_v_; }
   const SpanFormSurface& span_form() const { return fast_; }
 
   /// Fast path: S and its partials up to `Order` at (u, v) clamped to the domain. Allocation
@@ -68,6 +73,7 @@ class NurbsSurface {
   KnotVector knots_v_;
   std::vector<Eigen::Vector4d> cpw_;
   bool rational_ = false;
+  bool periodic_u_ = false, periodic_v_ = false;
   SpanFormSurface fast_;
 };
 

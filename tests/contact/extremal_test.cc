@@ -122,6 +122,37 @@ TEST(ExtremalTest, LeavingTheDomainStopsOnTheBoundary) {
   EXPECT_NEAR((e.p_f - c).normalized().dot((e.p_g - c).normalized()), 1.0, 1e-12);
 }
 
+TEST(ExtremalTest, ClosedSurfacesWrapAcrossTheirSeam) {
+  // Which primitives are periodic (closed with a C¹ seam), and a point-surface solve on a
+  // cylinder seeded on one side of its seam whose answer lies on the other: the longitude wraps
+  // instead of stopping on the domain edge.
+  const nurbs::NurbsSurface cylinder = MakeCylinder(0.02, 0.1);
+  const nurbs::NurbsSurface torus = nurbs::MakeTorus(0.05, 0.01);
+  const nurbs::NurbsSurface sphere = MakeSphere(Eigen::Vector3d::Zero(), 0.05);
+  const nurbs::NurbsSurface tube =
+      nurbs::MakeTube(nurbs::PaperclipPath(), nurbs::kPaperclipWireRadius);
+  EXPECT_TRUE(cylinder.periodic_u());
+  EXPECT_FALSE(cylinder.periodic_v());
+  EXPECT_TRUE(torus.periodic_u());
+  EXPECT_TRUE(torus.periodic_v());
+  EXPECT_TRUE(sphere.periodic_u());
+  EXPECT_FALSE(sphere.periodic_v());
+  EXPECT_FALSE(tube.periodic_u());
+  EXPECT_TRUE(tube.periodic_v());
+  const SpherePlane sp;
+  EXPECT_FALSE(sp.plane.periodic_u() || sp.plane.periodic_v());
+  const BodyPose pose = BodyPose::FromCoordinates(
+      Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
+  // The target: 1 cm outside the cylinder at longitude u = 0.01; the seed at u = 0.98.
+  const Eigen::Vector3d on = cylinder.Evaluate(0.01, 0.5, 0).S;
+  const Eigen::Vector3d target = on + 0.01 * Eigen::Vector3d(on.x(), on.y(), 0).normalized();
+  const PointSurfaceExtremum e = SolvePointSurface(target, cylinder, pose, {0.98, 0.5});
+  EXPECT_EQ(e.status, ExtremalStatus::kConverged);
+  EXPECT_FALSE(e.at_bound[0]);
+  EXPECT_NEAR(e.u[0], 0.01, 1e-12);
+  EXPECT_NEAR(e.distance, 0.01, kPosTol);
+}
+
 TEST(ExtremalTest, SeedsOutsideTheDomainAreClampedAndResultsStayInside) {
   const SpherePlane sp;
   const BodyPose pf = BodyPose::FromCoordinates(sp.Sphere(0.07));

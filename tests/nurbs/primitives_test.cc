@@ -42,6 +42,20 @@ TEST(PrimitivesTest, SphereRadiusExactIncludingPoles) {
   EXPECT_LT(s.Evaluate(0.3, 1.0).S_u.norm(), 1e-14);
 }
 
+TEST(PrimitivesTest, TransformedSurfaceIsTheMovedSurface) {
+  const NurbsSurface torus = MakeTorus(0.05, 0.01);
+  const Eigen::Isometry3d X = Eigen::Translation3d(0.1, -0.2, 0.3) *
+                              Eigen::AngleAxisd(0.8, Eigen::Vector3d(1, 2, -1).normalized());
+  const NurbsSurface moved = Transformed(torus, X);
+  double worst = 0.0;
+  ForGrid(torus, 40, [&](double u, double v, const SurfacePoint& p) {
+    const SurfacePoint m = moved.Evaluate(u, v);
+    worst = std::max({worst, (m.S - X * p.S).norm(), (m.S_u - X.linear() * p.S_u).norm(),
+                      (m.S_vv - X.linear() * p.S_vv).norm()});
+  });
+  EXPECT_LT(worst, 1e-14);
+}
+
 TEST(PrimitivesTest, CylinderAndTorusRadii) {
   const NurbsSurface cyl = MakeCylinder(0.02, 0.1);
   const NurbsSurface torus = MakeTorus(0.05, 0.01);

@@ -8,6 +8,7 @@
 
 #include "nurbs/primitives.h"
 #include "optimizer/contacts.h"
+#include "tests/optimizer/seeding.h"
 
 namespace tangent::optimizer {
 namespace {
@@ -40,32 +41,6 @@ Eigen::VectorXd NearContact(const Scene& s, double gap, std::mt19937_64& rng) {
   q << pa, 1.2 * qa.coeffs()[3], 1.2 * qa.x(), 1.2 * qa.y(), 1.2 * qa.z(), pb, 0.9 * qb.w(),
       0.9 * qb.x(), 0.9 * qb.y(), 0.9 * qb.z();
   return q;
-}
-
-// Seed by dense sampling of both surfaces (the nearest sample pair).
-Eigen::Vector4d BruteForceSeed(const Scene& s, const std::vector<BodyPose>& poses) {
-  const int n = 24;
-  std::vector<Eigen::Vector3d> fa, gb;
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < n; ++j) {
-      const double x = (i + 0.5) / n, y = (j + 0.5) / n;
-      fa.push_back(poses[static_cast<size_t>(s.a)].Point(s.sphere.Evaluate(x, y, 0).S));
-      gb.push_back(poses[static_cast<size_t>(s.b)].Point(s.patch.Evaluate(x, y, 0).S));
-    }
-  }
-  double best = 1e300;
-  Eigen::Vector4d seed;
-  for (size_t i = 0; i < fa.size(); ++i) {
-    for (size_t j = 0; j < gb.size(); ++j) {
-      const double d = (fa[i] - gb[j]).squaredNorm();
-      if (d < best) {
-        best = d;
-        seed << (static_cast<int>(i) / n + 0.5) / n, (static_cast<int>(i) % n + 0.5) / n,
-            (static_cast<int>(j) / n + 0.5) / n, (static_cast<int>(j) % n + 0.5) / n;
-      }
-    }
-  }
-  return seed;
 }
 
 // β and ∇β at q through a term (which tracks from its last parameters).
@@ -114,7 +89,10 @@ TEST(ContactTermsTest, SurfaceContactDerivativesMatchFiniteDifferences) {
       const Eigen::VectorXd q = NearContact(s, gap, rng);
       std::vector<BodyPose> poses;
       s.mech.Poses(q, &poses);
-      const auto term = MakeSurfaceContact(s.a, &s.sphere, s.b, &s.patch, BruteForceSeed(s, poses));
+      const auto term =
+          MakeSurfaceContact(s.a, &s.sphere, s.b, &s.patch,
+                             testing::NearestSamplePair(s.sphere, poses[static_cast<size_t>(s.a)],
+                                                        s.patch, poses[static_cast<size_t>(s.b)]));
       const double beta = Value(s.mech, *term, q, nullptr);
       ASSERT_EQ(term->extremum().status, contact::ExtremalStatus::kConverged);
       EXPECT_NEAR(beta, gap, 0.015);  // the bump and the offsets move it by millimetres
@@ -133,7 +111,8 @@ TEST(ContactTermsTest, PointOnSurfaceDerivativesMatchFiniteDifferences) {
       std::vector<BodyPose> poses;
       s.mech.Poses(q, &poses);
       const nurbs::SurfacePoint mid = s.patch.Evaluate(0.5, 0.5, 1);
-      const Eigen::Vector3d n_W = poses[static_cast<size_t>(s.b)].R * mid.S_u.cross(mid.S_v).normalized();
+      const Eigen::Vector3d n_W =
+          poses[static_cast<size_t>(s.b)].R * mid.S_u.cross(mid.S_v).normalized();
       const BodyPose& ball = poses[static_cast<size_t>(s.a)];
       const Eigen::Vector3d low_W = ball.q.head<3>() - 0.05 * n_W;
       const Attachment at{s.a, ball.R.transpose() * (low_W - ball.q.head<3>())};

@@ -6,6 +6,8 @@
 
 #include <numbers>
 
+#include "nurbs/primitives.h"
+#include "optimizer/contacts.h"
 #include "optimizer/goals.h"
 #include "optimizer/joints.h"
 #include "optimizer/problem.h"
@@ -44,16 +46,20 @@ struct FourBar {
   Problem MakeProblem(const Eigen::Vector3d& target, std::shared_ptr<PositionGoalTerm>* goal,
                       double grasp_weight = 1.0) const {
     Problem p(mechanism);
-    p.AddEquality(RevoluteJoint({ground, {0, 0, 0}, {0, 0, 1}, {1, 0, 0}},
-                                {crank, {0, 0, 0}, {0, 0, 1}, {1, 0, 0}}));
-    p.AddEquality(UniversalJoint({crank, {0, 0.1, 0}, {1, 0, 0}, {0, 1, 0}},
-                                 {coupler, {0, 0, 0}, {0, 0, 1}, {1, 0, 0}}));
-    p.AddEquality(SphericalJoint({coupler, {0.3, -0.1, 0.15}}, {rocker, {0, 0, 0.15}}));
-    p.AddEquality(RevoluteJoint({ground, {0.3, 0, 0}, {0, 1, 0}, {1, 0, 0}},
-                                {rocker, {0, 0, 0}, {0, 1, 0}, {1, 0, 0}}));
+    AddJoints(&p);
     *goal = MakePositionGoal(grasp, target);
     p.AddObjective(*goal, grasp_weight);
     return p;
+  }
+
+  void AddJoints(Problem* p) const {
+    p->AddEquality(RevoluteJoint({ground, {0, 0, 0}, {0, 0, 1}, {1, 0, 0}},
+                                 {crank, {0, 0, 0}, {0, 0, 1}, {1, 0, 0}}));
+    p->AddEquality(UniversalJoint({crank, {0, 0.1, 0}, {1, 0, 0}, {0, 1, 0}},
+                                  {coupler, {0, 0, 0}, {0, 0, 1}, {1, 0, 0}}));
+    p->AddEquality(SphericalJoint({coupler, {0.3, -0.1, 0.15}}, {rocker, {0, 0, 0.15}}));
+    p->AddEquality(RevoluteJoint({ground, {0.3, 0, 0}, {0, 1, 0}, {1, 0, 0}},
+                                 {rocker, {0, 0, 0}, {0, 1, 0}, {1, 0, 0}}));
   }
 
   /// The drag path: a circle of radius 1 cm through the coupler's initial midpoint, in the x–z
@@ -67,6 +73,64 @@ struct FourBar {
     const Eigen::Vector3d start(0.15, 0.05, 0.075);
     const double r = 0.01, s = 1e-3 * step / r;
     return start + r * Eigen::Vector3d(std::sin(s), 0, 1 - std::cos(s));
+  }
+};
+
+/// The same four-bar grasped through a floating surface–surface contact (seed 001 Fig. 7): a
+/// fingertip (a sphere of 4 mm radius on its own body) held by the hand through position and
+/// orientation goals, touching a free-form pad on the coupler: a 6 x 6 cm rational bicubic patch
+/// with a 3 mm bump and parameter directions 35° from orthogonal, facing +x at the grasp point.
+/// The contact is bilateral (β = 0): the tip may roll and slide on the pad but not leave it, so
+/// the hand's motion along the pad's normal drives the coupler while tangential motion slides.
+struct FloatingGraspFourBar : FourBar {
+  int finger;
+  /// Poles along ±y, away from the contact, which stays near the tip's −x side.
+  nurbs::NurbsSurface tip = nurbs::Transformed(
+      nurbs::MakeSphere({0, 0, 0}, 0.004),
+      Eigen::Isometry3d(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
+  nurbs::NurbsSurface pad;
+
+  static nurbs::NurbsSurface MakePad() {
+    const nurbs::NurbsSurface flat = nurbs::MakeShearedPatch(0.6, 0.06, 0.003, true);
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitY())
+                                  .toRotationMatrix();  // z → x
+    const Eigen::Vector3d centre = flat.Evaluate(0.5, 0.5, 0).S;
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = R;
+    X.translation() = Eigen::Vector3d(0.15, -0.05, 0.075) - R * centre;
+    return nurbs::Transformed(flat, X);
+  }
+  /// The tip's centre 4 mm off the pad's centre along its normal (world; the coupler starts
+  /// unrotated).
+  Eigen::Vector3d Reach() const {
+    const nurbs::SurfacePoint c = pad.Evaluate(0.5, 0.5, 1);
+    return 0.004 * c.S_u.cross(c.S_v).normalized();
+  }
+
+  FloatingGraspFourBar() : pad(MakePad()) {
+    Body f{"finger"};
+    f.mass = 0.02;
+    f.inertia = Eigen::Matrix3d::Identity() * 1.3e-7;
+    f.pose << Eigen::Vector3d(0.15, 0.05, 0.075) + Reach(), 1, 0, 0, 0;
+    finger = mechanism.AddBody(f);
+  }
+
+  Eigen::Vector3d HandPoint(int step) const { return PathPoint(step) + Reach(); }
+
+  Problem MakeProblem(std::shared_ptr<PositionGoalTerm>* goal,
+                      std::shared_ptr<SurfaceContactTerm>* contact, const Eigen::Vector4d& seed,
+                      double grasp_weight = 1.0) const {
+    Problem p(mechanism);
+    AddJoints(&p);
+    *contact = MakeSurfaceContact(finger, &tip, coupler, &pad, seed);
+    p.AddEquality(*contact);
+    *goal = MakePositionGoal({finger, {0, 0, 0}}, HandPoint(0));
+    p.AddObjective(*goal, grasp_weight);
+    // The hand holds the fingertip's orientation too (a 6-DOF grasp): without it a sphere's
+    // spin is free up to its tiny inertia and the contact point wanders over the tip.
+    p.AddObjective(OrientationGoal(finger, Eigen::Matrix3d::Identity(), {1, 1, 1}),
+                   1e-2 * grasp_weight);
+    return p;
   }
 };
 

@@ -9,6 +9,7 @@
 #include <cstdio>
 
 #include "tests/optimizer/fourbar.h"
+#include "tests/optimizer/seeding.h"
 #include "tests/support/alloc_counter.h"
 
 namespace tangent::optimizer {
@@ -57,6 +58,58 @@ TEST(SolverTest, FourBarDragKeepsJointsExactOverAThousandWarmSolves) {
   EXPECT_LE(worst, 1e-10);
   EXPECT_EQ(unconverged, 0);
   EXPECT_EQ(allocations, 0);
+}
+
+TEST(SolverTest, FourBarDraggedThroughAFloatingSurfaceContactKeepsItExact) {
+  testing::FloatingGraspFourBar fb;
+  std::vector<BodyPose> poses;
+  fb.mechanism.Poses(fb.mechanism.InitialCoordinates(), &poses);
+  const Eigen::Vector4d seed =
+      testing::NearestSamplePair(fb.tip, poses[static_cast<size_t>(fb.finger)], fb.pad,
+                                 poses[static_cast<size_t>(fb.coupler)], 48);
+  std::shared_ptr<PositionGoalTerm> goal;
+  std::shared_ptr<SurfaceContactTerm> contact;
+  const Problem p = fb.MakeProblem(&goal, &contact, seed);
+  Solver solver(p);
+  Eigen::VectorXd q = fb.mechanism.InitialCoordinates();
+  const SolveStats first = solver.Solve(&q);
+  ASSERT_TRUE(first.converged) << "assembly: violation " << first.max_violation << " seed "
+                               << seed.transpose() << " u " << contact->extremum().u.transpose()
+                               << " beta " << contact->extremum().beta << " status "
+                               << contact::ToString(contact->extremum().status);
+  double worst = 0.0, worst_beta = 0.0, worst_hand = 0.0;
+  int total_iter = 0, max_iter = 0, unconverged = 0;
+  const Eigen::Vector3d coupler_start = q.segment<3>(p.mechanism().offset(fb.coupler));
+  double coupler_travel = 0.0;
+  const long allocations_before = tangent::testing::AllocationCount();
+  for (int k = 1; k <= 1000; ++k) {
+    goal->set_target(fb.HandPoint(k));
+    const SolveStats s = solver.Solve(&q);
+    worst = std::max(worst, s.max_violation);
+    worst_beta = std::max(worst_beta, std::abs(contact->extremum().beta));
+    unconverged += !s.converged;
+    total_iter += s.iterations;
+    max_iter = std::max(max_iter, s.iterations);
+    ASSERT_EQ(contact->extremum().status, contact::ExtremalStatus::kConverged)
+        << "step " << k << " u " << contact->extremum().u.transpose() << " beta "
+        << contact->extremum().beta << " rcond " << contact->extremum().rcond;
+    const Eigen::Vector3d tip = q.segment<3>(p.mechanism().offset(fb.finger));
+    worst_hand = std::max(worst_hand, (tip - fb.HandPoint(k)).norm());
+    coupler_travel = std::max(
+        coupler_travel, (q.segment<3>(p.mechanism().offset(fb.coupler)) - coupler_start).norm());
+  }
+  const long allocations = tangent::testing::AllocationCount() - allocations_before;
+  std::printf(
+      "floating-grasp four-bar, 1000 warm solves: worst violation %.1e (beta %.1e), iterations "
+      "mean %.2f max %d, unconverged %d, allocations %ld, hand-tip gap max %.1e m, coupler "
+      "moved %.1f mm\n",
+      worst, worst_beta, total_iter / 1000.0, max_iter, unconverged, allocations, worst_hand,
+      1e3 * coupler_travel);
+  EXPECT_LE(worst, 1e-10);
+  EXPECT_LE(worst_beta, 1e-10);
+  EXPECT_EQ(unconverged, 0);
+  EXPECT_EQ(allocations, 0);
+  EXPECT_GT(coupler_travel, 0.002);  // the contact drove the mechanism
 }
 
 TEST(SolverTest, WarmSolveReachesTheColdOptimum) {
