@@ -146,7 +146,8 @@ NurbsSurface MakeTube(const std::vector<PathSegment>& path, double radius,
         for (int j = 0; j < nv; ++j) {
           const Eigen::Vector2d& a = section.points[static_cast<size_t>(j)];
           const double w = section.weights[static_cast<size_t>(j)];
-          const Eigen::Vector3d x(at[k].x() + a.x() * n.x(), at[k].y() + a.x() * n.y(), a.y());
+          // −a.y: the section runs clockwise seen along the path, so S_u × S_v points outward.
+          const Eigen::Vector3d x(at[k].x() + a.x() * n.x(), at[k].y() + a.x() * n.y(), -a.y());
           Eigen::Vector4d h;
           h << w * x, w;
           r[k].push_back(h);
@@ -181,7 +182,7 @@ NurbsSurface MakeTube(const std::vector<PathSegment>& path, double radius,
           // Left normal is −sign·radial, so the section point sits at rho = R − sign·a.
           const double rho = big_r - sign * a.x();
           Eigen::Vector4d arc[3];
-          RevolveArc(center, rho, a.y(), section.weights[static_cast<size_t>(j)], phi, phi + step,
+          RevolveArc(center, rho, -a.y(), section.weights[static_cast<size_t>(j)], phi, phi + step,
                      arc);
           for (int k = 0; k < 3; ++k) r[k].push_back(arc[k]);
         }

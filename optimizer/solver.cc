@@ -121,6 +121,16 @@ void Solver::SolveStep() {
   }
 }
 
+bool Solver::StepWithinTrustRegion() const {
+  if (!step_.allFinite()) return false;
+  const double rot = options_.max_rotation_step, trans = options_.max_translation_step;
+  for (int o = 0; o < n_; o += 7) {
+    if (rot > 0.0 && step_.segment<4>(o + 3).norm() > rot) return false;
+    if (trans > 0.0 && step_.segment<3>(o).norm() > trans) return false;
+  }
+  return true;
+}
+
 void Solver::Normalize(Eigen::VectorXd* q) const {
   const Mechanism& m = problem_.mechanism();
   for (int b = 0; b < m.num_bodies(); ++b) {
@@ -175,15 +185,23 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     // mechanism's free motions is of the objective's size, and damping sized by μ|J|² (here
     // 1e6 larger) would shorten every Newton step (measured: half the step, 4.5 iterations
     // per warm solve instead of 3).
+    //
+    // The same damping is the trust region: a step that turns a body by more than
+    // max_rotation_step (|ΔQ|) or moves it more than max_translation_step is recomputed with
+    // ten times the damping (Levenberg–Marquardt). A barely positive definite matrix otherwise
+    // gives an enormous step along its weakest direction (measured: a paperclip hanging on two
+    // contacts, free to spin about the line through them, flipped 186° in one step).
     double lm = options_.damping * objective_scale;
     H_.AddToDiagonal(lm);
-    for (int attempt = 0; attempt < 16; ++attempt) {
-      if (Factorize()) break;
+    for (int attempt = 0; attempt < 40; ++attempt) {
+      if (Factorize()) {
+        SolveStep();
+        if (StepWithinTrustRegion()) break;
+      }
       const double more = std::max(1e-8 * objective_scale, 10 * lm);
       H_.AddToDiagonal(more - lm);
       lm = more;
     }
-    SolveStep();
     // Safeguard for steps far from a solution: halve while the violation after the step exceeds
     // what a Newton step may leave, second order in the step (10 |Δq|², joint rows curve like
     // link lengths and |Q|² − 1 like 1), tenfold the current violation or 1e3 x the tolerance.

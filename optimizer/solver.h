@@ -27,6 +27,10 @@ struct SolverOptions {
   /// Linear algebra of the Newton step: dense LLᵀ for small systems, sparse LDLᵀ (Eigen's
   /// SimplicialLDLT, symbolic analysis done once per constraint structure) for large ones;
   /// kAuto picks sparse above `sparse_threshold` coordinates.
+  /// Trust region per Newton step and body: |ΔQ| (≈ half the rotation angle in radians for a
+  /// unit quaternion) and |Δp| in metres (0: no limit). Warm servo steps stay far below.
+  double max_rotation_step = 0.2;
+  double max_translation_step = 0.0;
   enum class Linear { kAuto, kDense, kSparse };
   Linear linear = Linear::kAuto;
   int sparse_threshold = 84;  ///< coordinates (12 moving bodies)
@@ -76,6 +80,7 @@ class Solver {
 
   bool Factorize();
   void SolveStep();
+  bool StepWithinTrustRegion() const;
 
   const Problem& problem_;
   SolverOptions options_;

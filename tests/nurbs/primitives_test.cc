@@ -124,6 +124,28 @@ TEST(PrimitivesTest, PaperclipTubeIsAtWireRadiusFromItsCentreLine) {
   EXPECT_NEAR(hi.x() - lo.x(), 8.9e-3, 0.1e-3);
 }
 
+TEST(PrimitivesTest, NormalsPointOutward) {
+  // S_u × S_v points away from the centre (line) of every closed primitive, as primitives.h says.
+  const NurbsSurface tube = MakeTube(PaperclipPath(), kPaperclipWireRadius);
+  const NurbsSurface sphere = MakeSphere({0, 0, 0}, 0.05);
+  const NurbsSurface cylinder = MakeCylinder(0.02, 0.1);
+  const NurbsSurface torus = MakeTorus(0.05, 0.01);
+  for (double u : {0.05, 0.2, 0.45, 0.7, 0.95}) {
+    for (double v : {0.1, 0.3, 0.6, 0.85}) {
+      const SurfacePoint t = tube.Evaluate(u, v, 1),
+                         t2 = tube.Evaluate(u, std::fmod(v + 0.5, 1.0), 1);
+      EXPECT_GT(t.S_u.cross(t.S_v).dot(t.S - 0.5 * (t.S + t2.S)), 0.0) << u << " " << v;
+      const SurfacePoint s = sphere.Evaluate(u, v, 1);
+      EXPECT_GT(s.S_u.cross(s.S_v).dot(s.S), 0.0);
+      const SurfacePoint c = cylinder.Evaluate(u, v, 1);
+      EXPECT_GT(c.S_u.cross(c.S_v).dot(Eigen::Vector3d(c.S.x(), c.S.y(), 0)), 0.0);
+      const SurfacePoint r = torus.Evaluate(u, v, 1);
+      const Eigen::Vector3d ring = 0.05 * Eigen::Vector3d(r.S.x(), r.S.y(), 0).normalized();
+      EXPECT_GT(r.S_u.cross(r.S_v).dot(r.S - ring), 0.0);
+    }
+  }
+}
+
 TEST(PrimitivesTest, TubeRejectsBadPaths) {
   EXPECT_THROW(MakeTube({}, 1e-3), std::invalid_argument);
   EXPECT_THROW(MakeTube({PathSegment::Arc(0.5e-3, 1.0)}, 1e-3), std::invalid_argument);

@@ -1,0 +1,137 @@
+// Reference problems of issue 4 beyond the four-bar: a chain of three paperclips held by two
+// surface contacts with one clip dragged, and a 22-DOF serial arm with joint limits reaching
+// goals (seed 002 §12).
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <numbers>
+
+#include "optimizer/goals.h"
+#include "optimizer/solver.h"
+#include "tests/optimizer/paperclips.h"
+#include "tests/support/alloc_counter.h"
+
+namespace tangent::optimizer {
+namespace {
+
+constexpr double mm = 1e-3;
+
+// Clip 2's far bend, dragged around a 3 mm circle in the x–z plane in 0.05 mm steps.
+Eigen::Vector3d ClipHand(const Eigen::Vector3d& start, int step) {
+  const double r = 3 * mm, s = 0.05 * mm * step / r;
+  return start + r * Eigen::Vector3d(std::sin(s), 0, 1 - std::cos(s));
+}
+
+struct ChainProblem {
+  testing::PaperclipChain chain;
+  std::shared_ptr<SurfaceContactTerm> c01, c12;
+  std::shared_ptr<PositionGoalTerm> goal;
+  Attachment handle;
+  Eigen::Vector3d start;
+  Problem problem;
+
+  explicit ChainProblem(bool unilateral) : problem(chain.mechanism) {
+    std::vector<BodyPose> poses;
+    chain.mechanism.Poses(chain.mechanism.InitialCoordinates(), &poses);
+    c01 = MakeSurfaceContact(chain.clip[0], &chain.wire, chain.clip[1], &chain.wire,
+                             chain.Seed(poses, chain.clip[0], chain.clip[1], chain.hook01));
+    c12 = MakeSurfaceContact(chain.clip[1], &chain.wire, chain.clip[2], &chain.wire,
+                             chain.Seed(poses, chain.clip[1], chain.clip[2], chain.hook12));
+    if (unilateral) {
+      problem.AddInequality(c01);
+      problem.AddInequality(c12);
+    } else {
+      problem.AddEquality(c01);
+      problem.AddEquality(c12);
+    }
+    handle = Attachment{chain.clip[2], {-2.5 * mm, 23 * mm, 0}};  // clip 2's top point
+    start = poses[static_cast<size_t>(chain.clip[2])].Point(handle.point);
+    goal = MakePositionGoal(handle, start);
+    problem.AddObjective(goal, 1.0);
+    problem.AddObjective(OrientationGoal(chain.clip[2], poses[2].R, {1, 1, 1}), 1e-4);
+  }
+};
+
+TEST(ReferenceTest, PaperclipChainDraggedKeepsBothContactsExact) {
+  ChainProblem cp(/*unilateral=*/false);
+  Solver solver(cp.problem);
+  Eigen::VectorXd q = cp.chain.mechanism.InitialCoordinates();
+  const SolveStats first = solver.Solve(&q);
+  ASSERT_TRUE(first.converged) << first.max_violation;
+  EXPECT_LT(std::abs(cp.c01->extremum().beta), 1e-10);
+  const Eigen::VectorXd q0 = q;
+  double worst = 0.0, clip1_travel = 0.0;
+  int total_iter = 0, max_iter = 0, unconverged = 0;
+  const long allocations_before = tangent::testing::AllocationCount();
+  for (int k = 1; k <= 1000; ++k) {
+    cp.goal->set_target(ClipHand(cp.start, k));
+    const SolveStats s = solver.Solve(&q);
+    worst = std::max(worst, s.max_violation);
+    total_iter += s.iterations;
+    max_iter = std::max(max_iter, s.iterations);
+    unconverged += !s.converged;
+    ASSERT_EQ(cp.c01->extremum().status, contact::ExtremalStatus::kConverged)
+        << "step " << k << " u " << cp.c01->extremum().u.transpose() << " at_bound "
+        << cp.c01->extremum().at_bound[0] << cp.c01->extremum().at_bound[1]
+        << cp.c01->extremum().at_bound[2] << cp.c01->extremum().at_bound[3] << " beta "
+        << cp.c01->extremum().beta;
+    ASSERT_EQ(cp.c12->extremum().status, contact::ExtremalStatus::kConverged) << "step " << k;
+    clip1_travel = std::max(clip1_travel, (q.segment<3>(0) - q0.segment<3>(0)).norm());
+  }
+  const long allocations = tangent::testing::AllocationCount() - allocations_before;
+  std::printf(
+      "paperclip chain (2 bilateral contacts), 1000 warm solves: worst violation %.1e, "
+      "iterations mean %.2f max %d, unconverged %d, allocations %ld, clip 1 moved %.2f mm\n",
+      worst, total_iter / 1000.0, max_iter, unconverged, allocations, clip1_travel / mm);
+  EXPECT_LE(worst, 1e-10);
+  EXPECT_EQ(unconverged, 0);
+  EXPECT_EQ(allocations, 0);
+  EXPECT_GT(clip1_travel, 0.5 * mm);  // the middle clip was carried by its two contacts
+}
+
+TEST(ReferenceTest, PaperclipChainWithUnilateralContactsPullsAndReleases) {
+  // Non-penetration (β ≥ 0) instead of floating contact. The chain hangs upward from the fixed
+  // clip 0: pulling clip 2 up 1 mm (0.01 mm steps) tensions both hooks (β = 0, positive
+  // multipliers: the contacts carry the pull) and clip 2 stays behind the hand; pushing it down
+  // to −2 mm releases its hook (β > 0) and leaves clip 1 where it was.
+  ChainProblem cp(/*unilateral=*/true);
+  Solver solver(cp.problem);
+  Eigen::VectorXd q = cp.chain.mechanism.InitialCoordinates();
+  ASSERT_TRUE(solver.Solve(&q).converged);
+  const Eigen::Vector3d clip1_start = q.segment<3>(0);
+  double worst = 0.0;
+  const long allocations_before = tangent::testing::AllocationCount();
+  auto drag = [&](double dy_from, double dy_to, int steps) {
+    for (int k = 1; k <= steps; ++k) {
+      const double dy = dy_from + (dy_to - dy_from) * k / steps;
+      cp.goal->set_target(cp.start + Eigen::Vector3d(0, dy, 0));
+      const SolveStats s = solver.Solve(&q);
+      ASSERT_TRUE(s.converged) << "dy " << dy;
+      worst = std::max(worst, s.max_violation);
+      ASSERT_GE(cp.c01->extremum().beta, -1e-10);
+      ASSERT_GE(cp.c12->extremum().beta, -1e-10);
+    }
+  };
+  drag(0.0, 1 * mm, 100);
+  const double lag = 1 * mm - (q[7 + 1] - (cp.start.y() - cp.handle.point.y()));
+  EXPECT_LT(std::abs(cp.c01->extremum().beta), 1e-9);  // both hooks carry the pull
+  EXPECT_LT(std::abs(cp.c12->extremum().beta), 1e-9);
+  EXPECT_GT(solver.inequality_multipliers().minCoeff(), 0.0);
+  EXPECT_LT((q.segment<3>(0) - clip1_start).norm(), 0.2 * mm);
+  const Eigen::Vector3d clip1_pulled = q.segment<3>(0);
+  drag(1 * mm, -2 * mm, 300);
+  EXPECT_GT(cp.c12->extremum().beta, 0.5 * mm);                  // released
+  EXPECT_LT((q.segment<3>(0) - clip1_pulled).norm(), 0.1 * mm);  // clip 1 left alone
+  const long allocations = tangent::testing::AllocationCount() - allocations_before;
+  std::printf(
+      "paperclip chain (2 unilateral contacts): pulled 1 mm, clip 2 held back %.3f mm, "
+      "multipliers %.2e %.2e, worst violation %.1e, released gap %.3f mm, allocations %ld\n",
+      lag / mm, solver.inequality_multipliers()[0], solver.inequality_multipliers()[1], worst,
+      cp.c12->extremum().beta / mm, allocations);
+  EXPECT_LE(worst, 1e-10);
+  EXPECT_EQ(allocations, 0);
+}
+
+}  // namespace
+}  // namespace tangent::optimizer
