@@ -54,9 +54,9 @@ BlockMatrix::BlockRef BlockMatrix::Block(int i, int j) {
 }
 
 void BlockMatrix::AddOffDiagonal(int i, int j, const Eigen::Matrix<double, 7, 7>& B) {
-  if (i > j) {
+  if (i < j) {
     Block(i, j) += B;
-  } else if (i < j) {
+  } else if (i > j) {
     Block(j, i) += B.transpose();
   } else {
     Block(i, i) += B + B.transpose();
@@ -95,9 +95,9 @@ double BlockMatrix::MaxAbsDiagonal() const {
 
 void BlockMatrix::Multiply(const Eigen::VectorXd& x, Eigen::VectorXd* y) const {
   if (sparse_) {
-    y->noalias() = sparse_matrix_.selfadjointView<Eigen::Lower>() * x;
+    y->noalias() = sparse_matrix_.selfadjointView<Eigen::Upper>() * x;
   } else {
-    y->noalias() = dense_.selfadjointView<Eigen::Lower>() * x;
+    y->noalias() = dense_.selfadjointView<Eigen::Upper>() * x;
   }
 }
 

@@ -26,14 +26,16 @@ class BlockMatrix {
   bool is_sparse() const { return sparse_; }
   /// The writable block (i, j); it must be in the pattern.
   BlockRef Block(int i, int j);
-  /// Adds B to block (i, j) and Bᵀ to (j, i), writing only the lower block triangle (the one
-  /// the factorizations read; i == j adds B + Bᵀ). The upper off-diagonal blocks stay zero:
-  /// the matrix is symmetric in meaning, lower-triangular in storage.
+  /// Adds B to block (i, j) and Bᵀ to (j, i), writing only the upper block triangle (the one
+  /// the factorizations read; i == j adds B + Bᵀ). The lower off-diagonal blocks stay zero:
+  /// the matrix is symmetric in meaning, upper-triangular in storage. (Upper, because Eigen's
+  /// simplicial factorization reads an upper-stored column-major matrix in place; the lower
+  /// triangle it would copy into a new matrix on every factorization.)
   void AddOffDiagonal(int i, int j, const Eigen::Matrix<double, 7, 7>& B);
   void SetZero();
   void AddToDiagonal(double value);
   double MaxAbsDiagonal() const;
-  /// y = A x for the symmetric matrix the lower triangle stands for.
+  /// y = A x for the symmetric matrix the upper triangle stands for.
   void Multiply(const Eigen::VectorXd& x, Eigen::VectorXd* y) const;
 
   const Eigen::MatrixXd& dense() const { return dense_; }

@@ -57,8 +57,8 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses) const {
   valid_ = true;
 }
 
-void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses,
-                                  Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                                  Eigen::Ref<Eigen::MatrixXd> J_a,
                                   Eigen::Ref<Eigen::MatrixXd> J_b) const {
   Update(poses);
   const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
@@ -109,7 +109,8 @@ PointOnSurfaceTerm::PointOnSurfaceTerm(const Attachment& point, int body_s,
                                        const Eigen::Vector2d& seed)
     : point_(point), body_s_(body_s), s_(surface), u_(seed) {
   if (!surface) throw std::invalid_argument("point on surface: null surface");
-  if (point.body == body_s) throw std::invalid_argument("point on surface: point on the surface's body");
+  if (point.body == body_s)
+    throw std::invalid_argument("point on surface: point on the surface's body");
   if (!seed.allFinite()) throw std::invalid_argument("point on surface: non-finite seed");
 }
 
@@ -125,8 +126,8 @@ void PointOnSurfaceTerm::Update(const std::vector<BodyPose>& poses) const {
   valid_ = true;
 }
 
-void PointOnSurfaceTerm::Evaluate(const std::vector<BodyPose>& poses,
-                                  Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+void PointOnSurfaceTerm::Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                                  Eigen::Ref<Eigen::MatrixXd> J_a,
                                   Eigen::Ref<Eigen::MatrixXd> J_b) const {
   Update(poses);
   const BodyPose& pa = poses[static_cast<size_t>(point_.body)];

@@ -148,8 +148,8 @@ void ProblemEvaluator::JacobianTimes(Kind kind, const Eigen::VectorXd& x,
 
 void ProblemEvaluator::AddGaussNewton(Kind kind, const Eigen::VectorXd& row_weights,
                                       BlockMatrix* H) const {
-  // Rank-one updates per row into fixed-size 7 x 7 accumulators; only the lower block triangle
-  // is written (the factorizations read the lower triangle).
+  // Rank-one updates per row into fixed-size 7 x 7 accumulators; only the upper block triangle
+  // is written (the factorizations read the upper triangle).
   const JacobianRows& Ja = J_a_[kind];
   const JacobianRows& Jb = J_b_[kind];
   for (const Item& it : items_[kind]) {
@@ -236,7 +236,7 @@ void ProblemEvaluator::AddCurvature(const std::vector<Problem::Entry>& list,
   BlockMatrix dense(problem_.mechanism().num_moving(), {}, false);
   AddCurvature(kind, weights, &dense);
   FoldRotations(&dense);
-  *H += Eigen::MatrixXd(dense.dense().selfadjointView<Eigen::Lower>());
+  *H += Eigen::MatrixXd(dense.dense().selfadjointView<Eigen::Upper>());
 }
 
 void TermHessian::Fold(const Eigen::Vector4d& Q_a, const Eigen::Vector4d& Q_b) {

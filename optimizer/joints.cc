@@ -228,26 +228,40 @@ class UnitQuaternionTerm final : public Term {
 };
 
 // θ = atan2(s, c) with s = (R_a ref_a × R_b ref_b)·(R_a axis), c = (R_a ref_a)·(R_b ref_b).
-double Angle(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b,
-             Eigen::Matrix<double, 1, 7>* dJa, Eigen::Matrix<double, 1, 7>* dJb) {
+// s = (R_a (axis × ref_a))·(R_b ref_b) too (rotations keep cross products): both are dot
+// products of one vector on each body, so their second derivatives are HessianRows::Dot's.
+struct AngleParts {
+  double theta, s, c;
+  Eigen::Matrix<double, 1, 14> ds, dc;  // [∂/∂q_a, ∂/∂q_b]
+};
+
+AngleParts AngleWithParts(const std::vector<BodyPose>& poses, const Attachment& a,
+                          const Attachment& b) {
   Matrix37 jra, jrb, jax;
   const Eigen::Vector3d ra = Direction(poses, a.body, a.reference, &jra);
   const Eigen::Vector3d rb = Direction(poses, b.body, b.reference, &jrb);
   const Eigen::Vector3d ax = Direction(poses, a.body, a.axis, &jax);
-  const double s = ra.cross(rb).dot(ax);
-  const double c = ra.dot(rb);
+  AngleParts p;
+  p.s = ra.cross(rb).dot(ax);
+  p.c = ra.dot(rb);
+  // ds = (dra × rb)·ax + (ra × drb)·ax + (ra × rb)·dax = (rb × ax)·dra + (ax × ra)·drb + ...
+  p.ds << rb.cross(ax).transpose() * jra + ra.cross(rb).transpose() * jax,
+      ax.cross(ra).transpose() * jrb;
+  p.dc << rb.transpose() * jra, ra.transpose() * jrb;
+  p.theta = std::atan2(p.s, p.c);
+  return p;
+}
+
+double Angle(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b,
+             Eigen::Matrix<double, 1, 7>* dJa, Eigen::Matrix<double, 1, 7>* dJb) {
+  const AngleParts p = AngleWithParts(poses, a, b);
   if (dJa) {
-    // ds = (dra × rb)·ax + (ra × drb)·ax + (ra × rb)·dax = (rb × ax)·dra + (ax × ra)·drb + ...
-    const Eigen::Matrix<double, 1, 7> ds_a =
-        rb.cross(ax).transpose() * jra + ra.cross(rb).transpose() * jax;
-    const Eigen::Matrix<double, 1, 7> ds_b = ax.cross(ra).transpose() * jrb;
-    const Eigen::Matrix<double, 1, 7> dc_a = rb.transpose() * jra;
-    const Eigen::Matrix<double, 1, 7> dc_b = ra.transpose() * jrb;
-    const double inv = 1.0 / (s * s + c * c);
-    *dJa = (c * ds_a - s * dc_a) * inv;
-    *dJb = (c * ds_b - s * dc_b) * inv;
+    const double inv = 1.0 / (p.s * p.s + p.c * p.c);
+    const Eigen::Matrix<double, 1, 14> d = (p.c * p.ds - p.s * p.dc) * inv;
+    *dJa = d.head<7>();
+    *dJb = d.tail<7>();
   }
-  return std::atan2(s, c);
+  return p.theta;
 }
 
 class RevoluteLimitsTerm final : public Term {
@@ -273,6 +287,29 @@ class RevoluteLimitsTerm final : public Term {
     J_a.row(1) = -da;
     J_b.row(0) = db;
     J_b.row(1) = -db;
+  }
+  bool has_hessian() const override { return true; }
+  // ω ∇²θ with ω = w_0 − w_1 (the rows are θ − lo and hi − θ). With ρ² = s² + c² and
+  // g = ∇θ = (c∇s − s∇c)/ρ²:
+  //   ∇²θ = (c∇²s − s∇²c)/ρ² + (∇c∇sᵀ − ∇s∇cᵀ)/ρ² − 2 g (s∇s + c∇c)ᵀ/ρ²   (symmetrized).
+  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override {
+    const double omega = w[0] - w[1];
+    const AngleParts p = AngleWithParts(poses, a_, b_);
+    const double rho2 = p.s * p.s + p.c * p.c;
+    const Eigen::Vector2d dot_weights(omega * p.c / rho2, -omega * p.s / rho2);
+    const Eigen::Ref<const Eigen::VectorXd> weights(dot_weights);
+    HessianRows rows{weights, h};
+    rows.Dot(poses, a_.body, a_.axis.cross(a_.reference), b_.body, b_.reference);
+    rows.Dot(poses, a_.body, a_.reference, b_.body, b_.reference);
+    const Eigen::Matrix<double, 1, 14> g = (p.c * p.ds - p.s * p.dc) / rho2;
+    Eigen::Matrix<double, 14, 14> R = p.dc.transpose() * p.ds - p.ds.transpose() * p.dc -
+                                      2.0 * g.transpose() * (p.s * p.ds + p.c * p.dc);
+    R = (0.5 * omega / rho2) * (R + R.transpose()).eval();
+    h->aa += R.topLeftCorner<7, 7>();
+    h->ab += R.topRightCorner<7, 7>();
+    h->bb += R.bottomRightCorner<7, 7>();
   }
 
  private:

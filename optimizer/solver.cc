@@ -51,7 +51,7 @@ Solver::Solver(const Problem& problem, const SolverOptions& options)
   if (H_.is_sparse()) {
     ldlt_.analyzePattern(H_.sparse());  // The structure is fixed: analysed once.
   } else {
-    llt_ = Eigen::LLT<Eigen::MatrixXd>(n_);
+    llt_ = Eigen::LLT<Eigen::MatrixXd, Eigen::Upper>(n_);
   }
   Reset();
 }
