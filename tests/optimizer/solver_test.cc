@@ -8,6 +8,7 @@
 
 #include <cstdio>
 
+#include "optimizer/interaction.h"
 #include "tests/optimizer/fourbar.h"
 #include "tests/optimizer/seeding.h"
 #include "tests/support/alloc_counter.h"
@@ -110,6 +111,51 @@ TEST(SolverTest, FourBarDraggedThroughAFloatingSurfaceContactKeepsItExact) {
   EXPECT_EQ(unconverged, 0);
   EXPECT_EQ(allocations, 0);
   EXPECT_GT(coupler_travel, 0.002);  // the contact drove the mechanism
+}
+
+TEST(SolverTest, SolveForGoalSubdividesALargeMoveAndPullToGoalFollowsTheLine) {
+  // A 4 cm jump of the grasp target with a budget of 6 iterations per solve: one solve cannot
+  // get there (the nearest configuration is across the crank's swing), so solve-for-goal halves
+  // the move until solves converge and then walks on; pull-to-goal takes 20 subgoals.
+  testing::FourBar fb;
+  std::shared_ptr<PositionGoalTerm> goal;
+  const Eigen::Vector3d from = testing::FourBar::PathPoint(0);
+  const Eigen::Vector3d to = from + Eigen::Vector3d(0.04, 0.0, -0.01);
+  const Problem p = fb.MakeProblem(from, &goal);
+  SolverOptions opt;
+  opt.max_iterations = 6;
+  Solver solver(p, opt);
+  Eigen::VectorXd q = fb.mechanism.InitialCoordinates();
+  Solver assemble(p);
+  ASSERT_TRUE(assemble.Solve(&q).converged);
+  const Eigen::VectorXd q0 = q;
+  {
+    Eigen::VectorXd direct = q0;
+    goal->set_target(to);
+    EXPECT_FALSE(solver.Solve(&direct).converged);  // one solve is not enough
+  }
+  Solver fresh(p, opt);
+  const ModeStats st =
+      SolveForGoal(&fresh, &q, [&](double s) { goal->set_target(from + s * (to - from)); });
+  EXPECT_TRUE(st.reached);
+  EXPECT_GT(st.subdivisions, 0);
+  EXPECT_LE(st.last.max_violation, 1e-10);
+  Solver puller(p, opt);
+  Eigen::VectorXd q_pull = q0;
+  const ModeStats pull = PullToGoal(
+      &puller, &q_pull, [&](double s) { goal->set_target(from + s * (to - from)); }, 20);
+  EXPECT_TRUE(pull.reached);
+  EXPECT_EQ(pull.solves, 20);
+  // Both end at the configuration nearest the target along the coupler curve, once least
+  // astonishment (whose reference is each path's last step) has settled: 3 more solves each.
+  for (int k = 0; k < 3; ++k) {
+    fresh.Solve(&q);
+    puller.Solve(&q_pull);
+  }
+  // (To the solves' stopping test: KKT 1e-8 leaves ~2e-8 in coordinates along the free motion.)
+  EXPECT_LT((q_pull - q).cwiseAbs().maxCoeff(), 1e-7);
+  std::printf("solve for goal: %d solves, %d subdivisions; pull to goal: %d solves\n", st.solves,
+              st.subdivisions, pull.solves);
 }
 
 TEST(SolverTest, WarmSolveReachesTheColdOptimum) {
