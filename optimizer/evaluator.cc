@@ -94,6 +94,7 @@ double ProblemEvaluator::Objective(const Eigen::VectorXd& q, const Eigen::Vector
   for (const Item& it : items_[kObjective]) {
     e += 0.5 * it.weight * values_[kObjective].segment(it.row, it.dim).squaredNorm();
   }
+  for (const Problem::DesignEntry& d : problem_.design_objectives()) e -= d.weight * d.f->Value(q);
   return e;
 }
 
@@ -103,6 +104,11 @@ void ProblemEvaluator::ObjectiveGradient(const Eigen::VectorXd& q, const Eigen::
   for (size_t b = 0; b < M.size(); ++b) {
     const int o = 7 * static_cast<int>(b);
     g->segment<7>(o).noalias() = w * (M[b] * (q.segment<7>(o) - q_ref.segment<7>(o)));
+  }
+  for (const Problem::DesignEntry& d : problem_.design_objectives()) {
+    Eigen::VectorXd gd;
+    d.f->Gradient(q, &gd);
+    *g -= d.weight * gd;
   }
   for (const Item& it : items_[kObjective]) {
     const auto r = values_[kObjective].segment(it.row, it.dim);
@@ -217,6 +223,7 @@ double ProblemEvaluator::Objective(const Eigen::VectorXd& q, const Eigen::Vector
   for (const Item& it : items_[kObjective]) {
     e += 0.5 * it.weight * values_[kObjective].segment(it.row, it.dim).squaredNorm();
   }
+  for (const Problem::DesignEntry& d : problem_.design_objectives()) e -= d.weight * d.f->Value(q);
   return e;
 }
 
@@ -226,6 +233,11 @@ void ProblemEvaluator::ObjectiveGradient(const Eigen::VectorXd& q, const Eigen::
   Eigen::VectorXd wr = values_[kObjective];
   for (const Item& it : items_[kObjective]) wr.segment(it.row, it.dim) *= it.weight;
   AddJacobianTransposeTimes(kObjective, wr, 1.0, g);
+  for (const Problem::DesignEntry& d : problem_.design_objectives()) {
+    Eigen::VectorXd gd;
+    d.f->Gradient(q, &gd);
+    *g -= d.weight * gd;
+  }
 }
 
 void ProblemEvaluator::AddCurvature(const std::vector<Problem::Entry>& list,

@@ -36,6 +36,15 @@ int Problem::AddEquality(TermPtr term) { return Add(&equalities_, &rows_e_, std:
 int Problem::AddInequality(TermPtr term) {
   return Add(&inequalities_, &rows_i_, std::move(term), 1.0);
 }
+void Problem::AddDesignObjective(std::shared_ptr<const DesignObjective> f, double weight) {
+  if (!f) throw std::invalid_argument("problem: null design objective");
+  if (!(weight >= 0.0) || !std::isfinite(weight)) {
+    throw std::invalid_argument("problem: design objective \"" + f->name() +
+                                "\" has an invalid weight");
+  }
+  design_.push_back({std::move(f), weight});
+}
+
 int Problem::AddObjective(TermPtr term, double weight) {
   return Add(&objectives_, &rows_o_, std::move(term), weight);
 }

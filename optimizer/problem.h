@@ -1,10 +1,23 @@
 #pragma once
 
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "optimizer/term.h"
 
 namespace tangent::optimizer {
+
+/// A scalar design objective to maximize, added to a Problem: E −= w f(q). Gradient only (the
+/// solver's Newton matrix gets no curvature from it: a damped ascent balanced by least
+/// astonishment, which suits design studies; see Dexterity).
+class DesignObjective {
+ public:
+  virtual ~DesignObjective() = default;
+  virtual std::string name() const = 0;
+  virtual double Value(const Eigen::VectorXd& q) const = 0;
+  virtual void Gradient(const Eigen::VectorXd& q, Eigen::VectorXd* g) const = 0;
+};
 
 /// minimize E(q) = ½ w_la (q − q_prev)ᵀ M (q − q_prev) + Σ ½ w_k |r_k(q)|²
 /// subject to c_E(q) = 0 and c_I(q) ≥ 0 (design.md §4.5). M is the kinetic-energy metric of the
@@ -24,6 +37,14 @@ class Problem {
   void set_weight(int objective, double w) {
     objectives_[static_cast<size_t>(objective)].weight = w;
   }
+  /// Design objective to maximize with weight w ≥ 0 (E −= w f). Not for the servo loop: the
+  /// objectives provided (Dexterity) allocate.
+  void AddDesignObjective(std::shared_ptr<const DesignObjective> f, double weight);
+  struct DesignEntry {
+    std::shared_ptr<const DesignObjective> f;
+    double weight = 1.0;
+  };
+  const std::vector<DesignEntry>& design_objectives() const { return design_; }
   /// Weight of least astonishment (0 disables it).
   void set_least_astonishment(double w) { least_astonishment_ = w; }
   double least_astonishment() const { return least_astonishment_; }
@@ -45,6 +66,7 @@ class Problem {
 
   Mechanism mechanism_;
   std::vector<Entry> equalities_, inequalities_, objectives_;
+  std::vector<DesignEntry> design_;
   int rows_e_ = 0, rows_i_ = 0, rows_o_ = 0;
   double least_astonishment_ = 1e-3;
 };

@@ -1,0 +1,138 @@
+#include "optimizer/dexterity.h"
+
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <stdexcept>
+
+#include "optimizer/goals.h"
+
+namespace tangent::optimizer {
+
+Dexterity::Dexterity(const Problem& problem, const Attachment& end_effector,
+                     const std::vector<std::pair<Attachment, Attachment>>& joints)
+    : problem_(problem), aux_(problem.mechanism()) {
+  if (joints.empty()) throw std::invalid_argument("dexterity: no joint chosen");
+  m_ = static_cast<int>(joints.size());
+  x_row_ = aux_.num_equality_rows();  // after the unit-quaternion rows aux_ made itself
+  aux_.AddEquality(PositionGoal(end_effector, Eigen::Vector3d::Zero()));
+  a_row_ = aux_.num_equality_rows();
+  // θ through RevoluteLimits' first row θ − lo (its Jacobian and Hessian are θ's).
+  for (const auto& [a, b] : joints) aux_.AddEquality(RevoluteLimits(a, b, -4.0, 4.0));
+}
+
+Dexterity::Measures Dexterity::Evaluate(const Eigen::VectorXd& q, bool gradients) const {
+  const int n = problem_.mechanism().num_coordinates();
+  const int mc = problem_.num_equality_rows();
+  if (mc + m_ != n) {
+    throw std::runtime_error("dexterity: " + std::to_string(m_) + " chosen joints, but the " +
+                             "mechanism has " + std::to_string(n - mc) +
+                             " degrees of freedom by its equality rows");
+  }
+  ProblemEvaluator main(problem_), aux(aux_);
+  main.Evaluate(q);
+  aux.Evaluate(q);
+  Eigen::MatrixXd B(n, n);
+  B.topRows(mc) = main.J_e();
+  for (int k = 0; k < m_; ++k) B.row(mc + k) = aux.J_e().row(a_row_ + 2 * k);
+  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(B);
+  const Eigen::MatrixXd X = aux.J_e().middleRows(x_row_, 3);
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(n, m_);
+  E.bottomRows(m_).setIdentity();
+  const Eigen::MatrixXd S = lu.solve(E);
+  if (!S.allFinite() ||
+      (B * S - E).cwiseAbs().maxCoeff() > 1e-8 * (1.0 + S.cwiseAbs().maxCoeff())) {
+    throw std::runtime_error(
+        "dexterity: the chosen joints do not parameterize the mechanism's motion here");
+  }
+  Measures out;
+  out.J = X * S;
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(out.J, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd sigma = svd.singularValues();
+  const int r = static_cast<int>(sigma.size());
+  const double s_max = sigma[0], s_min = sigma[r - 1];
+  out.dexterity = sigma.prod();
+  out.inverse_condition = s_max > 0 ? s_min / s_max : 0.0;
+  out.force_transmission = s_max > 0 ? 1.0 / s_max : 0.0;
+  if (!gradients) return out;
+
+  const Eigen::PartialPivLU<Eigen::MatrixXd> lu_t(B.transpose());
+  const Eigen::MatrixXd& U = svd.matrixU();
+  const Eigen::MatrixXd& V = svd.matrixV();
+  // G = ∂f/∂J for each measure (∂σ_i = u_iᵀ ∂J v_i).
+  Eigen::MatrixXd G_dex = Eigen::MatrixXd::Zero(3, m_);
+  for (int i = 0; i < r; ++i) G_dex += (out.dexterity / sigma[i]) * U.col(i) * V.col(i).transpose();
+  const Eigen::MatrixXd G_max = U.col(0) * V.col(0).transpose();
+  const Eigen::MatrixXd G_min = U.col(r - 1) * V.col(r - 1).transpose();
+  const Eigen::MatrixXd G_inv = G_min / s_max - (s_min / (s_max * s_max)) * G_max;
+  const Eigen::MatrixXd G_force = -G_max / (s_max * s_max);
+
+  auto gradient = [&](const Eigen::MatrixXd& G) {
+    // ∂f/∂q_k = ⟨Y1, ∂X/∂q_k⟩ + ⟨Y2, ∂B/∂q_k⟩, Y1 = G Sᵀ, Y2 = −B⁻ᵀ Xᵀ Y1.
+    const Eigen::MatrixXd Y1 = G * S.transpose();
+    const Eigen::MatrixXd Y2 = -lu_t.solve(X.transpose() * Y1);
+    Eigen::VectorXd grad = Eigen::VectorXd::Zero(n);
+    Eigen::VectorXd w_main(mc), w_aux = Eigen::VectorXd::Zero(aux_.num_equality_rows());
+    Eigen::MatrixXd H(n, n);
+    for (int j = 0; j < n; ++j) {
+      H.setZero();
+      w_main = Y2.col(j).head(mc);
+      main.AddCurvature(problem_.equalities(), w_main, &H);
+      w_aux.segment<3>(x_row_) = Y1.col(j);
+      for (int k = 0; k < m_; ++k) w_aux[a_row_ + 2 * k] = Y2(mc + k, j);
+      aux.AddCurvature(aux_.equalities(), w_aux, &H);
+      grad += H.col(j);
+    }
+    return grad;
+  };
+  out.grad_dexterity = gradient(G_dex);
+  out.grad_inverse_condition = gradient(G_inv);
+  out.grad_force_transmission = gradient(G_force);
+  return out;
+}
+
+namespace {
+
+class DexterityObjective final : public DesignObjective {
+ public:
+  DexterityObjective(std::shared_ptr<const Dexterity> d, DexterityMeasure m)
+      : d_(std::move(d)), m_(m) {}
+  std::string name() const override {
+    switch (m_) {
+      case DexterityMeasure::kDexterity:
+        return "dexterity";
+      case DexterityMeasure::kInverseCondition:
+        return "inverse_condition";
+      case DexterityMeasure::kForceTransmission:
+        break;
+    }
+    return "force_transmission";
+  }
+  double Value(const Eigen::VectorXd& q) const override {
+    const Dexterity::Measures r = d_->Evaluate(q, false);
+    return Pick(r.dexterity, r.inverse_condition, r.force_transmission);
+  }
+  void Gradient(const Eigen::VectorXd& q, Eigen::VectorXd* g) const override {
+    const Dexterity::Measures r = d_->Evaluate(q, true);
+    *g = m_ == DexterityMeasure::kDexterity          ? r.grad_dexterity
+         : m_ == DexterityMeasure::kInverseCondition ? r.grad_inverse_condition
+                                                     : r.grad_force_transmission;
+  }
+
+ private:
+  double Pick(double a, double b, double c) const {
+    return m_ == DexterityMeasure::kDexterity          ? a
+           : m_ == DexterityMeasure::kInverseCondition ? b
+                                                       : c;
+  }
+  std::shared_ptr<const Dexterity> d_;
+  DexterityMeasure m_;
+};
+
+}  // namespace
+
+std::shared_ptr<DesignObjective> MakeDexterityObjective(std::shared_ptr<const Dexterity> d,
+                                                        DexterityMeasure measure) {
+  return std::make_shared<DexterityObjective>(std::move(d), measure);
+}
+
+}  // namespace tangent::optimizer
