@@ -1,5 +1,9 @@
 #include "optimizer/solver.h"
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <Eigen/QR>
+
 #include <chrono>
 
 namespace tangent::optimizer {
@@ -131,6 +135,52 @@ bool Solver::StepWithinTrustRegion() const {
   return true;
 }
 
+void Solver::SecondOrderCheck(const Eigen::VectorXd& q, SolveStats* st) {
+  // H_L = ∇²E − Σ λ_i ∇²c_i: the Newton matrix without the μ JᵀJ terms (μ = 0 while building).
+  ev_.Evaluate(q);
+  ev_.ObjectiveGradient(q, q_prev_, M_, &grad_e_);
+  kkt_ = grad_e_;
+  AugmentedGradient();  // (sets the active set from the multipliers)
+  const double mu = mu_;
+  mu_ = 0.0;
+  NewtonMatrix();
+  mu_ = mu;
+  Eigen::MatrixXd H = H_.is_sparse() ? Eigen::MatrixXd(H_.sparse()) : H_.dense();
+  H = Eigen::MatrixXd(H.selfadjointView<Eigen::Upper>());
+  // Active constraints: equalities and inequalities with a positive multiplier, their Jacobian
+  // assembled column by column.
+  const int me = ev_.c_e().size(), mi = ev_.c_i().size();
+  Eigen::MatrixXd J(me + mi, n_);
+  Eigen::VectorXd e = Eigen::VectorXd::Zero(n_), ce(me), ci(mi);
+  for (int k = 0; k < n_; ++k) {
+    e[k] = 1.0;
+    ev_.JacobianTimes(ProblemEvaluator::kEquality, e, &ce);
+    ev_.JacobianTimes(ProblemEvaluator::kInequality, e, &ci);
+    J.col(k) << ce, ci;
+    e[k] = 0.0;
+  }
+  int rows = me;
+  for (int i = 0; i < mi; ++i) {
+    if (lambda_i_[i] > 0.0) J.row(rows++) = J.row(me + i);
+  }
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(J.topRows(rows));
+  lu.setThreshold(1e-10);
+  const Eigen::MatrixXd Z = lu.kernel();
+  st->reduced_hessian_checked = true;
+  if (Z.cols() == 0 || (Z.cols() == 1 && Z.norm() == 0.0)) {  // no free motion: trivially a minimum
+    st->reduced_hessian_positive_definite = true;
+    st->reduced_hessian_min_eigenvalue = 0.0;
+    return;
+  }
+  // Orthonormal basis of the free motions, then the reduced Hessian's spectrum.
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(Z);
+  const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(n_, Z.cols());
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Q.transpose() * H * Q);
+  st->reduced_hessian_min_eigenvalue = eig.eigenvalues().minCoeff();
+  st->reduced_hessian_positive_definite =
+      st->reduced_hessian_min_eigenvalue > 1e-12 * std::max(1.0, eig.eigenvalues().maxCoeff());
+}
+
 void Solver::Normalize(Eigen::VectorXd* q) const {
   const Mechanism& m = problem_.mechanism();
   for (int b = 0; b < m.num_bodies(); ++b) {
@@ -233,6 +283,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
   }
   st.objective = ev_.Objective(q, q_prev_, M_);
   st.penalty = mu_;
+  if (options_.second_order_check) SecondOrderCheck(q, &st);
   return st;
 }
 

@@ -31,6 +31,9 @@ struct SolverOptions {
   /// unit quaternion) and |Δp| in metres (0: no limit). Warm servo steps stay far below.
   double max_rotation_step = 0.2;
   double max_translation_step = 0.0;
+  /// Compute the reduced-Hessian statistic after each solve (dense eigen-decomposition,
+  /// allocates: for tests and design studies, not for the servo loop).
+  bool second_order_check = false;
   enum class Linear { kAuto, kDense, kSparse };
   Linear linear = Linear::kAuto;
   int sparse_threshold = 84;  ///< coordinates (12 moving bodies)
@@ -44,6 +47,12 @@ struct SolveStats {
   double penalty = 1e6;
   bool converged = false;
   bool budget_exhausted = false;
+  /// Second-order check (only with SolverOptions::second_order_check): the Lagrangian's Hessian
+  /// restricted to the null space of the active constraints' Jacobian is positive definite
+  /// (a strict local minimum, not a saddle), and its smallest eigenvalue.
+  bool reduced_hessian_checked = false;
+  bool reduced_hessian_positive_definite = false;
+  double reduced_hessian_min_eigenvalue = 0.0;
 };
 
 /// Augmented Lagrangian with the PHR form for inequalities (design.md §4.5), in its primal-dual
@@ -85,6 +94,7 @@ class Solver {
 
   bool Factorize();
   void SolveStep();
+  void SecondOrderCheck(const Eigen::VectorXd& q, SolveStats* st);
   bool StepWithinTrustRegion() const;
 
   const Problem& problem_;

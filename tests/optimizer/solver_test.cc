@@ -158,6 +158,48 @@ TEST(SolverTest, SolveForGoalSubdividesALargeMoveAndPullToGoalFollowsTheLine) {
               st.subdivisions, pull.solves);
 }
 
+TEST(SolverTest, ReducedHessianTellsMinimaFromSaddles) {
+  // A pendulum (revolute about z at the origin, tip 0.1 m out along x) and a goal pulling the
+  // tip towards a point: placed on the far side from the goal the configuration is stationary
+  // but a maximum of the distance along the free rotation (reduced Hessian negative); on the
+  // near side it is a minimum.
+  Mechanism m;
+  Body g{"ground"};
+  g.fixed = true;
+  const int ground = m.AddBody(g);
+  const int link = m.AddBody(Body{"link"});
+  for (double side : {-1.0, 1.0}) {
+    Problem p(m);
+    p.AddEquality(RevoluteJoint({ground, {0, 0, 0}, {0, 0, 1}, {1, 0, 0}},
+                                {link, {0, 0, 0}, {0, 0, 1}, {1, 0, 0}}));
+    p.AddObjective(PositionGoal({link, {0.1, 0, 0}}, {side, 0, 0}), 1.0);
+    p.set_least_astonishment(0.0);
+    SolverOptions opt;
+    opt.second_order_check = true;
+    Solver solver(p, opt);
+    Eigen::VectorXd q = m.InitialCoordinates();
+    const SolveStats s = solver.Solve(&q);
+    ASSERT_TRUE(s.converged);
+    ASSERT_TRUE(s.reduced_hessian_checked);
+    EXPECT_EQ(s.reduced_hessian_positive_definite, side > 0) << side;
+    EXPECT_EQ(s.reduced_hessian_min_eigenvalue > 0, side > 0) << s.reduced_hessian_min_eigenvalue;
+  }
+  // The four-bar's dragged configurations are minima.
+  testing::FourBar fb;
+  std::shared_ptr<PositionGoalTerm> goal;
+  const Problem p = fb.MakeProblem(testing::FourBar::PathPoint(0), &goal);
+  SolverOptions opt;
+  opt.second_order_check = true;
+  Solver solver(p, opt);
+  Eigen::VectorXd q = fb.mechanism.InitialCoordinates();
+  for (int k = 0; k <= 50; k += 10) {
+    goal->set_target(testing::FourBar::PathPoint(k));
+    const SolveStats s = solver.Solve(&q);
+    EXPECT_TRUE(s.reduced_hessian_positive_definite)
+        << k << " " << s.reduced_hessian_min_eigenvalue;
+  }
+}
+
 TEST(SolverTest, WarmSolveReachesTheColdOptimum) {
   // Without least astonishment the optimum is where the grasp is closest to the goal on the
   // mechanism's one-dimensional configuration curve; warm and cold solves must agree there.
