@@ -5,6 +5,7 @@
 #include <Eigen/QR>
 
 #include <chrono>
+#include <limits>
 
 namespace tangent::optimizer {
 
@@ -37,6 +38,7 @@ Solver::Solver(const Problem& problem, const SolverOptions& options)
   g_.setZero(n_);
   step_.setZero(n_);
   q_try_.setZero(n_);
+  q_best_.setZero(n_);
   shifted_.setZero(problem.num_inequality_rows());
   kkt_.setZero(n_);
   grad_e_.setZero(n_);
@@ -209,6 +211,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
   // i.e. the augmented-Lagrangian Newton step with the multipliers updated every iteration
   // from the linearized constraints. Near a warm start this is Newton on the KKT system
   // (quadratic convergence); the 1/μ block keeps redundant constraints regular.
+  double best_score = std::numeric_limits<double>::infinity(), best_violation = 0.0, best_kkt = 0.0;
   for (st.iterations = 0; st.iterations < options_.max_iterations; ++st.iterations) {
     // ∇E once per iteration: the KKT residual and the step's right-hand side both use it.
     ev_.ObjectiveGradient(q, q_prev_, M_, &grad_e_);
@@ -221,6 +224,16 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
         st.kkt_residual <= options_.kkt_tolerance) {
       st.converged = true;
       break;
+    }
+    // The best iterate so far, by the worse of its two residuals relative to their tolerances:
+    // what an unconverged solve returns.
+    const double score = std::max(st.max_violation / options_.constraint_tolerance,
+                                  st.kkt_residual / options_.kkt_tolerance);
+    if (score < best_score) {
+      best_score = score;
+      q_best_ = q;
+      best_violation = st.max_violation;
+      best_kkt = st.kkt_residual;
     }
     if (options_.time_budget_us > 0 &&
         std::chrono::duration<double, std::micro>(Clock::now() - start).count() >
@@ -280,6 +293,25 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
       lambda_i_[i] = std::max(0.0, lambda_i_[i] - mu_ * linearized_i_[i]);
     }
     q = q_try_;
+  }
+  if (!st.converged && !st.budget_exhausted) {
+    // Out of iterations: the last step's point has not been scored yet (ev_ is at q).
+    ev_.ObjectiveGradient(q, q_prev_, M_, &grad_e_);
+    st.max_violation = Violation();
+    kkt_ = grad_e_;
+    ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &kkt_);
+    ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, &kkt_);
+    st.kkt_residual = kkt_.size() ? kkt_.cwiseAbs().maxCoeff() : 0.0;
+  }
+  if (!st.converged && best_score < std::numeric_limits<double>::infinity()) {
+    const double score = std::max(st.max_violation / options_.constraint_tolerance,
+                                  st.kkt_residual / options_.kkt_tolerance);
+    if (!(score <= best_score)) {  // (also when the last iterate's residuals are NaN)
+      q = q_best_;
+      ev_.Evaluate(q);
+      st.max_violation = best_violation;
+      st.kkt_residual = best_kkt;
+    }
   }
   st.objective = ev_.Objective(q, q_prev_, M_);
   st.penalty = mu_;

@@ -103,7 +103,7 @@ class Solver {
   ProblemEvaluator ev_;
   BlockMatrix H_;
   std::vector<Matrix7d> M_;
-  Eigen::VectorXd q_prev_, lambda_e_, lambda_i_, g_, step_, q_try_, shifted_;
+  Eigen::VectorXd q_prev_, lambda_e_, lambda_i_, g_, step_, q_try_, q_best_, shifted_;
   Eigen::VectorXd weights_, gn_e_, gn_i_, gn_o_, kkt_, grad_e_, linearized_e_, linearized_i_,
       jstep_e_, jstep_i_;
   Eigen::LLT<Eigen::MatrixXd, Eigen::Upper> llt_;

@@ -200,6 +200,29 @@ TEST(SolverTest, ReducedHessianTellsMinimaFromSaddles) {
   }
 }
 
+TEST(SolverTest, ABudgetReturnsTheBestIterateWithItsOwnStatistics) {
+  // Two iterations for a 4 cm jump: not converged; the configuration returned is the best one
+  // seen, finite, and the statistics describe it (checked by evaluating it independently).
+  testing::FourBar fb;
+  std::shared_ptr<PositionGoalTerm> goal;
+  const Problem p = fb.MakeProblem(testing::FourBar::PathPoint(0), &goal);
+  Eigen::VectorXd q = fb.mechanism.InitialCoordinates();
+  Solver(p).Solve(&q);
+  for (int budget : {1, 2, 3}) {
+    SolverOptions opt;
+    opt.max_iterations = budget;
+    Solver solver(p, opt);
+    Eigen::VectorXd qb = q;
+    goal->set_target(testing::FourBar::PathPoint(0) + Eigen::Vector3d(0.04, 0, -0.01));
+    const SolveStats s = solver.Solve(&qb);
+    EXPECT_FALSE(s.converged);
+    ASSERT_TRUE(qb.allFinite());
+    ProblemEvaluator ev(p);
+    ev.Evaluate(qb);
+    EXPECT_DOUBLE_EQ(s.max_violation, ev.c_e().cwiseAbs().maxCoeff()) << budget;
+  }
+}
+
 TEST(SolverTest, WarmSolveReachesTheColdOptimum) {
   // Without least astonishment the optimum is where the grasp is closest to the goal on the
   // mechanism's one-dimensional configuration curve; warm and cold solves must agree there.
