@@ -15,8 +15,8 @@
 
 #include <cstdio>
 #include <map>
-#include <string>
 #include <random>
+#include <string>
 
 #include "bench/median_reporter.h"
 #include "contact/global.h"
@@ -62,7 +62,8 @@ struct Scene {
         Eigen::Isometry3d x = base[static_cast<size_t>(k)];
         if (k > 0) {
           x.translate(0.2 * mm * Eigen::Vector3d(u(rng), u(rng), u(rng)));
-          x.rotate(Eigen::AngleAxisd(0.03 * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized()));
+          x.rotate(Eigen::AngleAxisd(0.03 * u(rng),
+                                     Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized()));
         }
         const Eigen::Quaterniond q(x.rotation());
         Vector7d v;
@@ -152,8 +153,8 @@ int main(int argc, char** argv) {
       const std::string name =
           std::string("global_pass/") + (clips == 3 ? "three_clips/" : "twenty_clips/") + label;
       names.push_back(name);
-      benchmark::RegisterBenchmark(name.c_str(), [clips, manager = manager, name](
-                                                     benchmark::State& s) {
+      benchmark::RegisterBenchmark(name.c_str(), [clips, manager = manager,
+                                                  name](benchmark::State& s) {
         BM_GlobalPass(s, clips, manager, name);
       })->Unit(benchmark::kMicrosecond);
     }
@@ -166,14 +167,14 @@ int main(int argc, char** argv) {
               "tri. pairs", "neglected", "refined", "found");
   for (const std::string& n : names) {
     const PassStats& s = g_stats[n];
-    std::printf("%-34s %10.1f %12.1f %12.1f %10.1f %10.1f %8.2f\n", n.c_str(),
-                reporter.Get(n), s.candidates, s.triangle_pairs, s.neglected, s.refined,
-                s.found);
+    std::printf("%-34s %10.1f %12.1f %12.1f %10.1f %10.1f %8.2f\n", n.c_str(), reporter.Get(n),
+                s.candidates, s.triangle_pairs, s.neglected, s.refined, s.found);
   }
   const double three = reporter.Get("global_pass/three_clips/dynamic_aabb");
   const double twenty = reporter.Get("global_pass/twenty_clips/dynamic_aabb");
-  std::printf("\nTarget: three clips <= 100 us per pass (median): %.1f us — %s; twenty clips %.1f us\n",
-              three, three >= 0 && three <= 100 ? "met" : "NOT MET", twenty);
+  std::printf(
+      "\nTarget: three clips <= 100 us per pass (median): %.1f us — %s; twenty clips %.1f us\n",
+      three, three >= 0 && three <= 100 ? "met" : "NOT MET", twenty);
   if (with_sap) {
     std::printf("  dynamic AABB tree / sweep and prune: three clips %.2f, twenty clips %.2f\n",
                 three / reporter.Get("global_pass/three_clips/sap"),

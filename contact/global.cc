@@ -3,9 +3,9 @@
 #include <fcl/fcl.h>
 
 #include <algorithm>
-#include <map>
 #include <array>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 #include <string>
 
@@ -31,7 +31,7 @@ namespace {
 struct Chunk {
   std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> model;
   std::unique_ptr<fcl::CollisionObjectd> object;
-  std::vector<int> triangles;  // chunk triangle k is surface triangle triangles[k]
+  std::vector<int> triangles;    // chunk triangle k is surface triangle triangles[k]
   Eigen::Vector2d uv_lo, uv_hi;  // parameter box of its vertices
 };
 
@@ -99,8 +99,8 @@ Eigen::Vector2d ParametersAt(const Watched& w, const BodyPose& pose, int t,
     }
   }
   const auto& uv = w.s.mesh->base.uv;
-  return (1.0 - l1 - l2) * uv[static_cast<size_t>(tri[0])] +
-         l1 * uv[static_cast<size_t>(tri[1])] + l2 * uv[static_cast<size_t>(tri[2])];
+  return (1.0 - l1 - l2) * uv[static_cast<size_t>(tri[0])] + l1 * uv[static_cast<size_t>(tri[1])] +
+         l2 * uv[static_cast<size_t>(tri[2])];
 }
 
 // Domain bounds and periodicity of a pair's four parameters.
@@ -152,7 +152,7 @@ Eigen::Vector3d Centroid(const Watched& w, const BodyPose& pose, int t) {
 struct GlobalContactStage::Impl {
   std::vector<Watched> watched;
   std::vector<std::pair<int, int>> chunk_owner;  // global chunk id → (surface, chunk)
-  std::vector<char> allowed;  // n x n
+  std::vector<char> allowed;                     // n x n
   std::unique_ptr<fcl::BroadPhaseCollisionManagerd> manager;
   // Chunk pairs the broad phase reported: (surface a, surface b, chunk of a, chunk of b), a < b.
   std::vector<std::array<int, 4>> candidates;
@@ -164,10 +164,13 @@ namespace {
 
 bool BroadPhaseCallback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* data) {
   auto* impl = static_cast<GlobalContactStage::Impl*>(data);
-  auto [a, ca] = impl->chunk_owner[static_cast<size_t>(reinterpret_cast<intptr_t>(o1->getUserData()))];
-  auto [b, cb] = impl->chunk_owner[static_cast<size_t>(reinterpret_cast<intptr_t>(o2->getUserData()))];
+  auto [a, ca] =
+      impl->chunk_owner[static_cast<size_t>(reinterpret_cast<intptr_t>(o1->getUserData()))];
+  auto [b, cb] =
+      impl->chunk_owner[static_cast<size_t>(reinterpret_cast<intptr_t>(o2->getUserData()))];
   if (a == b || !impl->Allowed(a, b)) return false;
-  if (impl->watched[static_cast<size_t>(a)].s.body == impl->watched[static_cast<size_t>(b)].s.body) {
+  if (impl->watched[static_cast<size_t>(a)].s.body ==
+      impl->watched[static_cast<size_t>(b)].s.body) {
     return false;
   }
   if (a > b) {
@@ -205,8 +208,8 @@ GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
   }
   for (int i = 0; i < m.n; ++i) {
     const GlobalSurface& s = surfaces[static_cast<size_t>(i)];
-    if (!s.surface || !s.mesh) throw std::invalid_argument("global contact: surface " +
-                                                           std::to_string(i) + " has no mesh");
+    if (!s.surface || !s.mesh)
+      throw std::invalid_argument("global contact: surface " + std::to_string(i) + " has no mesh");
     if (s.mesh->offset < options.release) {
       throw std::invalid_argument("global contact: surface " + std::to_string(i) +
                                   "'s offset is below the release distance");
@@ -305,8 +308,8 @@ void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
     Box box;
     const nurbs::NurbsSurface& fa = *m.watched[static_cast<size_t>(a)].s.surface;
     const nurbs::NurbsSurface& fb = *m.watched[static_cast<size_t>(b)].s.surface;
-    box.lo << fa.knots_u().domain_begin(), fa.knots_v().domain_begin(),
-        fb.knots_u().domain_begin(), fb.knots_v().domain_begin();
+    box.lo << fa.knots_u().domain_begin(), fa.knots_v().domain_begin(), fb.knots_u().domain_begin(),
+        fb.knots_v().domain_begin();
     box.hi << fa.knots_u().domain_end(), fa.knots_v().domain_end(), fb.knots_u().domain_end(),
         fb.knots_v().domain_end();
     box.periodic = {fa.periodic_u(), fa.periodic_v(), fb.periodic_u(), fb.periodic_v()};
@@ -414,7 +417,8 @@ void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
       if (!ok) continue;
       bool duplicate = false;
       for (const GlobalContact& f : found_) {
-        if (f.a == a && f.b == b && (f.p_a - e.p_f).norm() < 1e-8 && (f.p_b - e.p_g).norm() < 1e-8) {
+        if (f.a == a && f.b == b && (f.p_a - e.p_f).norm() < 1e-8 &&
+            (f.p_b - e.p_g).norm() < 1e-8) {
           duplicate = true;
           break;
         }
@@ -453,7 +457,8 @@ void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
         break;
       }
     }
-    if (!known) events->push_back({ContactEvent::Kind::kAdded, ContactEvent::Reason::kApproached, f});
+    if (!known)
+      events->push_back({ContactEvent::Kind::kAdded, ContactEvent::Reason::kApproached, f});
   }
   std::sort(found_.begin(), found_.end(), [](const GlobalContact& x, const GlobalContact& y) {
     return std::tie(x.a, x.b, x.u[0], x.u[1]) < std::tie(y.a, y.b, y.u[0], y.u[1]);

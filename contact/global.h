@@ -66,13 +66,13 @@ struct ContactEvent {
 const char* ToString(ContactEvent::Reason r);
 
 struct GlobalStats {
-  int candidate_pairs = 0;  ///< surface pairs the broad phase reported (after the filter)
+  int candidate_pairs = 0;      ///< surface pairs the broad phase reported (after the filter)
   int chunk_pairs_tested = 0;   ///< mesh strips whose boxes overlap, narrow phase run
   int chunk_pairs_skipped = 0;  ///< ... skipped: near a tracked contact on both surfaces
   int triangle_pairs = 0;       ///< intersecting offset-triangle pairs (narrow phase)
-  int seeds_neglected = 0;  ///< inside a sphere of neglect
-  int seeds_refined = 0;    ///< Newton solves run
-  int found = 0;            ///< distinct extremal contacts with β < activation
+  int seeds_neglected = 0;      ///< inside a sphere of neglect
+  int seeds_refined = 0;        ///< Newton solves run
+  int found = 0;                ///< distinct extremal contacts with β < activation
 };
 
 /// The global contact stage (seed 001 §5, Fig. 3 and 5; design.md §2): a polygonal collision

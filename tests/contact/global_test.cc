@@ -1,8 +1,9 @@
 // The global contact stage on three interlocked paperclips: over 1000 seeded random
 // configurations near contact, the contacts found with β > −0.3 mm match a brute-force reference
 // (dense samples of both wires, local minima of their distance, the same Newton solver): none
-// missed, none duplicated, none extra, positions within 1e-9 m. The inner/outer-loop case gives two contacts; grazing,
-// hysteresis and deep interpenetration give the right events; filters and bad input.
+// missed, none duplicated, none extra, positions within 1e-9 m. The inner/outer-loop case gives two
+// contacts; grazing, hysteresis and deep interpenetration give the right events; filters and bad
+// input.
 
 #include "contact/global.h"
 
@@ -164,17 +165,19 @@ TEST(GlobalTest, ThreeClipsMatchTheBruteForceReferenceOverAThousandConfiguration
       for (const GlobalContact& f : stage.found()) {
         if (f.a == r.a && f.b == r.b && (f.p_a - r.p_a).norm() < 1e-6) {
           ++matches;
-          worst_position = std::max({worst_position, (f.p_a - r.p_a).norm(), (f.p_b - r.p_b).norm()});
+          worst_position =
+              std::max({worst_position, (f.p_a - r.p_a).norm(), (f.p_b - r.p_b).norm()});
         }
       }
       missed += matches == 0;
       if (matches == 0 && missed <= 8) {
         GlobalStats gs;
         stage.Run(poses, {}, &events, &gs);
-        std::printf("  missed: pair %d-%d beta %.3e u %.4f %.4f %.4f %.4f; stage: tri pairs %d "
-                    "neglected %d refined %d found %d\n",
-                    r.a, r.b, r.beta, r.u[0], r.u[1], r.u[2], r.u[3], gs.triangle_pairs,
-                    gs.seeds_neglected, gs.seeds_refined, gs.found);
+        std::printf(
+            "  missed: pair %d-%d beta %.3e u %.4f %.4f %.4f %.4f; stage: tri pairs %d "
+            "neglected %d refined %d found %d\n",
+            r.a, r.b, r.beta, r.u[0], r.u[1], r.u[2], r.u[3], gs.triangle_pairs, gs.seeds_neglected,
+            gs.seeds_refined, gs.found);
       }
       duplicates += matches > 1;
     }

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "nurbs/primitives.h"
-#include "tests/contact/paperclip_chain.h"
 #include "optimizer/contacts.h"
 #include "optimizer/problem.h"
+#include "tests/contact/paperclip_chain.h"
 
 namespace tangent::optimizer::testing {
 
