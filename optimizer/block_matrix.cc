@@ -93,19 +93,4 @@ double BlockMatrix::MaxAbsDiagonal() const {
   return m;
 }
 
-void BlockMatrix::Multiply(const Eigen::VectorXd& x, Eigen::VectorXd* y) const {
-  if (sparse_) {
-    y->noalias() = sparse_matrix_.selfadjointView<Eigen::Upper>() * x;
-  } else {
-    y->noalias() = dense_.selfadjointView<Eigen::Upper>() * x;
-  }
-}
-
-int BlockMatrix::num_stored_blocks() const {
-  if (!sparse_) return num_blocks_ * num_blocks_;
-  int k = 0;
-  for (const auto& rows : column_blocks_) k += static_cast<int>(rows.size());
-  return k;
-}
-
 }  // namespace tangent::optimizer

@@ -35,13 +35,9 @@ class BlockMatrix {
   void SetZero();
   void AddToDiagonal(double value);
   double MaxAbsDiagonal() const;
-  /// y = A x for the symmetric matrix the upper triangle stands for.
-  void Multiply(const Eigen::VectorXd& x, Eigen::VectorXd* y) const;
 
   const Eigen::MatrixXd& dense() const { return dense_; }
   const Eigen::SparseMatrix<double>& sparse() const { return sparse_matrix_; }
-  /// Number of stored blocks (both triangles and the diagonal).
-  int num_stored_blocks() const;
 
  private:
   int num_blocks_ = 0;

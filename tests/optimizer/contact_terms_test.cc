@@ -8,7 +8,7 @@
 
 #include "nurbs/primitives.h"
 #include "optimizer/contacts.h"
-#include "tests/optimizer/seeding.h"
+#include "tests/contact/scenes.h"
 
 namespace tangent::optimizer {
 namespace {
@@ -89,10 +89,10 @@ TEST(ContactTermsTest, SurfaceContactDerivativesMatchFiniteDifferences) {
       const Eigen::VectorXd q = NearContact(s, gap, rng);
       std::vector<BodyPose> poses;
       s.mech.Poses(q, &poses);
-      const auto term =
-          MakeSurfaceContact(s.a, &s.sphere, s.b, &s.patch,
-                             testing::NearestSamplePair(s.sphere, poses[static_cast<size_t>(s.a)],
-                                                        s.patch, poses[static_cast<size_t>(s.b)]));
+      const auto term = MakeSurfaceContact(
+          s.a, &s.sphere, s.b, &s.patch,
+          contact::testing::ClosestGridPair(s.sphere, poses[static_cast<size_t>(s.a)], s.patch,
+                                            poses[static_cast<size_t>(s.b)], 23));
       const double beta = Value(s.mech, *term, q, nullptr);
       ASSERT_EQ(term->extremum().status, contact::ExtremalStatus::kConverged);
       EXPECT_NEAR(beta, gap, 0.015);  // the bump and the offsets move it by millimetres
