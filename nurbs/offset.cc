@@ -5,11 +5,12 @@
 
 namespace tangent::nurbs {
 
-OffsetMesh MakeOffsetMesh(const NurbsSurface& surface, double tolerance, double margin) {
+OffsetMesh MakeOffsetMesh(const NurbsSurface& surface, double tolerance, double margin,
+                          double max_edge) {
   if (!(tolerance > 0.0)) throw std::invalid_argument("offset mesh: tolerance must be positive");
   if (!(margin > 0.0)) throw std::invalid_argument("offset mesh: margin must be positive");
   OffsetMesh out;
-  out.base = Tessellate(surface, tolerance);
+  out.base = Tessellate(surface, tolerance, 4097, max_edge);
   out.tessellation_bound = out.base.error_bound;
   out.offset = out.tessellation_bound + margin;
   const size_t n = out.base.vertices.size();

@@ -27,9 +27,11 @@ struct OffsetMesh {
 };
 
 /// @param tolerance the tessellation's target bound ε (m) @param margin (m) the distance below
-/// which surfaces must be found; r = ε + margin. @throws std::invalid_argument on non-positive
-/// arguments.
-OffsetMesh MakeOffsetMesh(const NurbsSurface& surface, double tolerance, double margin);
+/// which surfaces must be found; r = ε + margin. @param max_edge (m) when positive, no grid
+/// cell's chord is longer (see Tessellate). @throws std::invalid_argument on non-positive
+/// tolerance or margin.
+OffsetMesh MakeOffsetMesh(const NurbsSurface& surface, double tolerance, double margin,
+                          double max_edge = 0.0);
 
 /// What CGAL says about an offset mesh when a scene loads.
 struct OffsetCertificate {

@@ -82,8 +82,10 @@ CellBound BoundCell(const NurbsSurface& s, double u0, double u1, double v0, doub
 
 }  // namespace
 
-TriangleMesh Tessellate(const NurbsSurface& surface, double tolerance, int max_lines) {
+TriangleMesh Tessellate(const NurbsSurface& surface, double tolerance, int max_lines,
+                        double max_edge) {
   if (!(tolerance > 0.0)) throw std::invalid_argument("tessellate: tolerance must be positive");
+  if (!(max_edge >= 0.0)) throw std::invalid_argument("tessellate: max_edge must not be negative");
   std::vector<double> us = surface.knots_u().Breakpoints();
   std::vector<double> vs = surface.knots_v().Breakpoints();
   // A cell must not exceed ~quarter turns of a circle for the flatness to fall fast; start with
@@ -114,6 +116,20 @@ TriangleMesh Tessellate(const NurbsSurface& surface, double tolerance, int max_l
         if (c.bound > tolerance) {
           any = true;
           (c.curvature_u >= c.curvature_v ? split_u[i] : split_v[j]) = 1;
+        }
+        if (max_edge > 0.0) {
+          const Eigen::Vector3d s00 = surface.Evaluate(us[i], vs[j], 0).S;
+          const Eigen::Vector3d s10 = surface.Evaluate(us[i + 1], vs[j], 0).S;
+          const Eigen::Vector3d s01 = surface.Evaluate(us[i], vs[j + 1], 0).S;
+          const Eigen::Vector3d s11 = surface.Evaluate(us[i + 1], vs[j + 1], 0).S;
+          if (std::max((s10 - s00).norm(), (s11 - s01).norm()) > max_edge) {
+            split_u[i] = 1;
+            any = true;
+          }
+          if (std::max((s01 - s00).norm(), (s11 - s10).norm()) > max_edge) {
+            split_v[j] = 1;
+            any = true;
+          }
         }
       }
     }

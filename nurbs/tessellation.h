@@ -32,8 +32,13 @@ struct TriangleMesh {
 /// where L is the bilinear interpolant of the four corners (which lie on the surface), M the
 /// two-triangle split of the cell along its (0,0)–(1,1) diagonal, and d = P00 − P10 − P01 + P11
 /// the twist: the first |d|/4 bounds Σλ L(x) − L(Σλx) = d·Cov(a/p, b/q), the second |L − M|.
-/// @throws std::invalid_argument when tolerance is not positive.
-TriangleMesh Tessellate(const NurbsSurface& surface, double tolerance, int max_lines = 4097);
+///
+/// With `max_edge` > 0, an interval is also halved while a cell's chord along it (between its
+/// corners) is longer than max_edge: flat stretches (a wire's straight legs) then get cells of
+/// bounded size, which the global contact stage needs to tell contacts apart along a surface.
+/// @throws std::invalid_argument when tolerance is not positive or max_edge is negative.
+TriangleMesh Tessellate(const NurbsSurface& surface, double tolerance, int max_lines = 4097,
+                        double max_edge = 0.0);
 
 /// Distance from x to the two triangles of the grid cell of `mesh` that contains (u, v)
 /// (clamped to the grid). For x = S(u, v) this is at most `mesh.error_bound`.

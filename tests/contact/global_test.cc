@@ -25,7 +25,7 @@ constexpr double mm = 1e-3;
 
 struct Clips {
   nurbs::NurbsSurface wire = nurbs::MakeTube(nurbs::PaperclipPath(), nurbs::kPaperclipWireRadius);
-  nurbs::OffsetMesh mesh = nurbs::MakeOffsetMesh(wire, 20e-6, 0.25e-3);
+  nurbs::OffsetMesh mesh = nurbs::MakeOffsetMesh(wire, 20e-6, 0.25e-3, 0.5e-3);
   std::vector<GlobalSurface> Surfaces(int n) const {
     std::vector<GlobalSurface> s;
     for (int k = 0; k < n; ++k) s.push_back({k, &wire, &mesh});
@@ -233,6 +233,16 @@ TEST(GlobalTest, InnerAndOuterLoopGiveTwoContactsNotOne) {
   ASSERT_EQ(stage.found().size(), 2u);
   EXPECT_NEAR((stage.found()[0].p_a - stage.found()[1].p_a).norm(), 1.5 * mm, 0.05 * mm);
   EXPECT_GT(st.seeds_neglected, 0);
+  // With one crossing tracked, the blocks around it are skipped (any contact there would be the
+  // tracked one) and the other crossing, 1.5 mm away in space but on the other loop, is added.
+  const std::vector<GlobalContact> both = stage.found();
+  for (int k = 0; k < 2; ++k) {
+    stage.Run(AcrossTheInnerLoop(0.0), {both[static_cast<size_t>(k)]}, &events, &st);
+    EXPECT_GT(st.chunk_pairs_skipped, 0);
+    ASSERT_EQ(events.size(), 1u);
+    EXPECT_EQ(events[0].kind, ContactEvent::Kind::kAdded);
+    EXPECT_LT((events[0].contact.p_a - both[static_cast<size_t>(1 - k)].p_a).norm(), 1e-9);
+  }
 }
 
 TEST(GlobalTest, GrazingHysteresisAndDeepInterpenetrationEvents) {

@@ -7,6 +7,7 @@
 
 #include <numbers>
 #include <random>
+#include <string>
 
 #include "nurbs/primitives.h"
 #include "tests/nurbs/random_nurbs.h"
@@ -62,6 +63,38 @@ TEST(TessellationTest, ReportsBoundWhenCappedAndRejectsBadTolerance) {
   std::mt19937_64 rng(78);
   EXPECT_LE(SampledError(s, m, rng, 5000), m.error_bound);
   EXPECT_THROW(Tessellate(s, 0.0), std::invalid_argument);
+  try {
+    Tessellate(s, 1e-3, 4097, -1.0);
+    FAIL() << "negative max_edge accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("max_edge"), std::string::npos) << e.what();
+  }
+}
+
+// A paperclip's straight legs are flat: by tolerance alone a leg is one cell 20+ mm long. With
+// max_edge every cell's chords are bounded, and the bound still holds.
+TEST(TessellationTest, MaxEdgeBoundsTheCellsOfFlatStretches) {
+  const NurbsSurface clip = MakeTube(PaperclipPath(), kPaperclipWireRadius);
+  const TriangleMesh coarse = Tessellate(clip, 100e-6);
+  const TriangleMesh fine = Tessellate(clip, 100e-6, 4097, 0.5e-3);
+  auto longest = [&](const TriangleMesh& m) {
+    double worst = 0.0;
+    for (const auto& t : m.triangles) {
+      for (int k = 0; k < 3; ++k) {
+        worst =
+            std::max(worst, (m.vertices[static_cast<size_t>(t[static_cast<size_t>(k)])] -
+                             m.vertices[static_cast<size_t>(t[static_cast<size_t>((k + 1) % 3)])])
+                                .norm());
+      }
+    }
+    return worst;
+  };
+  EXPECT_GT(longest(coarse), 10e-3);
+  // Triangle edges: the cell's two chords and its diagonal (at most sqrt(2) x max_edge).
+  EXPECT_LE(longest(fine), std::sqrt(2.0) * 0.5e-3 + 1e-12);
+  EXPECT_LE(fine.error_bound, 100e-6);
+  std::mt19937_64 rng(79);
+  EXPECT_LE(SampledError(clip, fine, rng, 5000), fine.error_bound);
 }
 
 }  // namespace
