@@ -224,8 +224,23 @@ GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
   }
   for (int i = 0; i < m.n; ++i) {
     const GlobalSurface& s = surfaces[static_cast<size_t>(i)];
-    if (!s.surface || !s.mesh)
-      throw std::invalid_argument("global contact: surface " + std::to_string(i) + " has no mesh");
+    if (!s.surface) {
+      throw std::invalid_argument("global contact: surface " + std::to_string(i) + " is null");
+    }
+    bool declared = false;
+    for (const auto& [a, b] : pairs) declared = declared || a == i || b == i;
+    if (!s.mesh) {
+      // A surface in no declared pair needs no mesh: it is never tested (model only what the
+      // scene asks for).
+      if (declared) {
+        throw std::invalid_argument("global contact: surface " + std::to_string(i) +
+                                    " is in a declared pair but has no offset mesh");
+      }
+      Watched w;
+      w.s = s;
+      m.watched.push_back(std::move(w));
+      continue;
+    }
     if (s.mesh->offset < options.release) {
       throw std::invalid_argument("global contact: surface " + std::to_string(i) +
                                   "'s offset is below the release distance");
@@ -305,7 +320,9 @@ GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
     w.periodic_v = s.surface->periodic_v();
     m.watched.push_back(std::move(w));
   }
-  for (Watched& w : m.watched) m.manager->registerObject(w.object.get());
+  for (Watched& w : m.watched) {
+    if (w.object) m.manager->registerObject(w.object.get());
+  }
   m.manager->setup();
 }
 
@@ -324,6 +341,7 @@ void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
   //    surface's box, paired where their own boxes overlap. (One manager over all blocks was
   //    measured first: with 20 clips, ~2000 blocks, its tree dominated the pass.)
   for (Watched& w : m.watched) {
+    if (!w.object) continue;
     const BodyPose& p = poses[static_cast<size_t>(w.s.body)];
     w.object->setTransform(p.R, p.Point(w.centre));
     w.object->computeAABB();
@@ -333,7 +351,9 @@ void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
     // then loops forever (measured: three clip boxes, first jiggled pass). The manager is rebuilt
     // from the sorted boxes instead: a full sort per pass, not seed 004's coherent insertion sort.
     m.manager->clear();
-    for (Watched& w : m.watched) m.manager->registerObject(w.object.get());
+    for (Watched& w : m.watched) {
+      if (w.object) m.manager->registerObject(w.object.get());
+    }
     m.manager->setup();
   } else {
     m.manager->update();

@@ -57,9 +57,22 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses) const {
   valid_ = true;
 }
 
+void SurfaceContactTerm::Activate(const Eigen::Vector4d& u) {
+  active_ = true;
+  Reseed(u);
+}
+
+void SurfaceContactTerm::Deactivate() { active_ = false; }
+
 void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
                                   Eigen::Ref<Eigen::MatrixXd> J_a,
                                   Eigen::Ref<Eigen::MatrixXd> J_b) const {
+  if (!active_) {  // a free slot: far apart, no gradient, nothing evaluated
+    r[0] = kInactiveDistance;
+    J_a.setZero();
+    J_b.setZero();
+    return;
+  }
   Update(poses);
   const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
   const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
@@ -72,6 +85,7 @@ void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref
 void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses,
                                             const Eigen::Ref<const Eigen::VectorXd>& w,
                                             TermHessian* h) const {
+  if (!active_) return;
   Update(poses);
   const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
   const BodyPose& pg = poses[static_cast<size_t>(body_g_)];

@@ -47,9 +47,19 @@ class SurfaceContactTerm final : public Term {
   /// Restarts tracking from new parameters (after a global contact search).
   void Reseed(const Eigen::Vector4d& u) const;
 
+  /// Contact slots (the server's way of adding and dropping contacts without changing the
+  /// problem's structure): an inactive term evaluates nothing and reports β = kInactiveDistance
+  /// with zero derivatives, which as an inequality (β ≥ 0) is inactive and gets multiplier 0.
+  /// Not for equalities. Activate restarts tracking from u (a global-stage contact event).
+  static constexpr double kInactiveDistance = 1.0;  // m
+  void Activate(const Eigen::Vector4d& u);
+  void Deactivate();
+  bool active() const { return active_; }
+
  private:
   void Update(const std::vector<BodyPose>& poses) const;
 
+  bool active_ = true;
   int body_f_, body_g_;
   const nurbs::NurbsSurface* f_;
   const nurbs::NurbsSurface* g_;

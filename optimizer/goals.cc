@@ -10,39 +10,38 @@ namespace {
 
 using Matrix37 = Eigen::Matrix<double, 3, 7>;
 
-class Orientation final : public Term {
- public:
-  Orientation(int body, const Eigen::Matrix3d& R, const Eigen::Vector3d& w)
-      : body_(body), R_(R), w_(w) {
-    if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-9) {
-      throw std::invalid_argument("orientation goal: target is not a rotation matrix");
-    }
-  }
-  std::string name() const override { return "orientation_goal"; }
-  int dim() const override { return 9; }
-  int body_a() const override { return body_; }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd>) const override {
-    const BodyPose& p = poses[static_cast<size_t>(body_)];
-    for (int i = 0; i < 3; ++i) {
-      const Eigen::Vector3d e = Eigen::Vector3d::Unit(i);
-      r.segment<3>(3 * i) = w_[i] * (p.R * e - R_.col(i));
-      J_a.middleRows<3>(3 * i) = w_[i] * contact::DirectionJacobian(p, e);
-    }
-  }
-  bool has_hessian() const override { return true; }
-  void AddWeightedHessian(const std::vector<BodyPose>&, const Eigen::Ref<const Eigen::VectorXd>& w,
-                          TermHessian* h) const override {
-    for (int i = 0; i < 3; ++i) {
-      h->W_a.col(i) += w_[i] * w.segment<3>(3 * i);  // y eᵢᵀ
-    }
-  }
+}  // namespace
 
- private:
-  int body_;
-  Eigen::Matrix3d R_;
-  Eigen::Vector3d w_;
-};
+OrientationGoalTerm::OrientationGoalTerm(int body, const Eigen::Matrix3d& R,
+                                         const Eigen::Vector3d& w)
+    : body_(body), R_(R), w_(w) {
+  if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-9) {
+    throw std::invalid_argument("orientation goal: target is not a rotation matrix");
+  }
+}
+
+void OrientationGoalTerm::Evaluate(const std::vector<BodyPose>& poses,
+                                   Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                                   Eigen::Ref<Eigen::MatrixXd>) const {
+  const BodyPose& p = poses[static_cast<size_t>(body_)];
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d e = Eigen::Vector3d::Unit(i);
+    r.segment<3>(3 * i) = w_[i] * (p.R * e - R_.col(i));
+    J_a.middleRows<3>(3 * i) = w_[i] * contact::DirectionJacobian(p, e);
+  }
+}
+
+void OrientationGoalTerm::AddWeightedHessian(const std::vector<BodyPose>&,
+                                             const Eigen::Ref<const Eigen::VectorXd>& w,
+                                             TermHessian* h) const {
+  for (int i = 0; i < 3; ++i) {
+    h->W_a.col(i) += w_[i] * w.segment<3>(3 * i);  // y eᵢᵀ
+  }
+}
+
+void OrientationGoalTerm::set_target(const Eigen::Matrix3d& R_target) { R_ = R_target; }
+
+namespace {
 
 class Concat final : public Term {
  public:
@@ -226,7 +225,11 @@ TermPtr PositionGoal(const Attachment& at, const Eigen::Vector3d& t) {
   return MakePositionGoal(at, t);
 }
 TermPtr OrientationGoal(int body, const Eigen::Matrix3d& R, const Eigen::Vector3d& w) {
-  return std::make_shared<Orientation>(body, R, w);
+  return std::make_shared<OrientationGoalTerm>(body, R, w);
+}
+std::shared_ptr<OrientationGoalTerm> MakeOrientationGoal(int body, const Eigen::Matrix3d& R,
+                                                         const Eigen::Vector3d& w) {
+  return std::make_shared<OrientationGoalTerm>(body, R, w);
 }
 TermPtr PoseGoal(const Attachment& at, const Eigen::Vector3d& t, const Eigen::Matrix3d& R,
                  const Eigen::Vector3d& w) {

@@ -35,7 +35,31 @@ std::shared_ptr<PositionGoalTerm> MakePositionGoal(const Attachment& at,
 TermPtr PositionGoal(const Attachment& at, const Eigen::Vector3d& target_W);
 /// Orientation with per-axis weights: w_i (R e_i − R_target e_i), i = x, y, z (9 rows; a zero
 /// weight frees rotation that moves that axis only through the others).
+class OrientationGoalTerm final : public Term {
+ public:
+  /// @throws std::invalid_argument when R_target is not a rotation.
+  OrientationGoalTerm(int body, const Eigen::Matrix3d& R_target, const Eigen::Vector3d& weights);
+  /// Moves the target (each servo tick of a 6-DOF device: the stylus). @pre a rotation.
+  void set_target(const Eigen::Matrix3d& R_target);
+  const Eigen::Matrix3d& target() const { return R_; }
+  std::string name() const override { return "orientation_goal"; }
+  int dim() const override { return 9; }
+  int body_a() const override { return body_; }
+  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
+  bool has_hessian() const override { return true; }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override;
+
+ private:
+  int body_;
+  Eigen::Matrix3d R_;
+  Eigen::Vector3d w_;
+};
 TermPtr OrientationGoal(int body, const Eigen::Matrix3d& R_target, const Eigen::Vector3d& weights);
+std::shared_ptr<OrientationGoalTerm> MakeOrientationGoal(int body, const Eigen::Matrix3d& R_target,
+                                                         const Eigen::Vector3d& weights);
 /// Position and orientation together (3 + 9 rows).
 TermPtr PoseGoal(const Attachment& at, const Eigen::Vector3d& target_W,
                  const Eigen::Matrix3d& R_target, const Eigen::Vector3d& weights);

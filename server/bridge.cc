@@ -1,0 +1,263 @@
+#include "server/bridge.h"
+
+#include <poll.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <sstream>
+#include <vector>
+
+#include <lcm/lcm-cpp.hpp>
+#include <tangent/contact_states_t.hpp>
+#include <tangent/device_state_t.hpp>
+#include <tangent/loop_stats_t.hpp>
+#include <tangent/scene_state_t.hpp>
+#include <tangent/wrench_t.hpp>
+
+namespace tangent::server {
+
+std::unique_ptr<lcm::LCM> OpenLcm(const std::string& url) {
+  auto lcm = std::make_unique<lcm::LCM>(url);
+  if (!lcm->good()) {
+    throw LcmError(
+        "LCM could not start on \"" + url +
+        "\". With a udpm:// URL this means UDP multicast is not routed on this host (no default "
+        "route, or loopback without multicast). Fix, as root:\n"
+        "  ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo\n"
+        "or run inside a private network namespace:\n"
+        "  unshare -rn sh -c 'ip link set lo up; ip route add 224.0.0.0/4 dev lo; <command>'");
+  }
+  return lcm;
+}
+
+struct Bridge::Impl {
+  Engine* engine;
+  Channels ch;
+  std::FILE* log;
+  bool status;
+  std::unique_ptr<lcm::LCM> lcm;
+  DeviceFilter filter;
+  BridgeSummary* summary;
+  std::vector<uint64_t> window_prev, window_now, totals;
+  int64_t last_ticks = 0;
+  int64_t last_stats_ns = 0;
+  int64_t start_ns = 0;
+  tangent::wrench_t wrench;
+  tangent::contact_states_t contacts;
+  tangent::scene_state_t scene_msg;
+  tangent::loop_stats_t stats;
+  Snapshot snap;
+
+  void OnDevice(const lcm::ReceiveBuffer*, const std::string&, const tangent::device_state_t* m) {
+    const DeviceFilter::Verdict v =
+        filter.Check(m->utime, m->seq, m->position, m->orientation, m->velocity);
+    if (v != DeviceFilter::Verdict::kAccepted) return;
+    DeviceSample s;
+    s.utime = m->utime;
+    s.seq = m->seq;
+    std::memcpy(s.position, m->position, sizeof(s.position));
+    std::memcpy(s.orientation, m->orientation, sizeof(s.orientation));
+    std::memcpy(s.velocity, m->velocity, sizeof(s.velocity));
+    s.buttons = m->buttons;
+    s.received_ns = MonotonicNs();
+    engine->device().Write(s);
+  }
+  void OnPing(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    lcm->publish(ch.pong, rbuf->data, rbuf->data_size);
+    ++summary->pings;
+  }
+
+  void PublishWrenches() {
+    WrenchSample w;
+    while (engine->wrenches().Pop(&w)) {
+      wrench.utime = w.utime;
+      wrench.seq = w.seq;
+      wrench.server_utime = w.server_utime;
+      wrench.frame = "device";
+      for (int i = 0; i < 3; ++i) {
+        wrench.force[i] = w.force[i];
+        wrench.torque[i] = w.torque[i];
+      }
+      wrench.state = w.state;
+      lcm->publish(ch.wrench, &wrench);
+      ++summary->wrenches_sent;
+    }
+  }
+
+  void PublishScene(int64_t now) {
+    engine->snapshot().Read(&snap);
+    const Scene& sc = engine->servo().scene();
+    contacts.utime = now / 1000;
+    contacts.num_contacts = snap.num_contacts;
+    contacts.contacts.resize(static_cast<size_t>(snap.num_contacts));
+    for (int k = 0; k < snap.num_contacts; ++k) {
+      const TrackedContact& c = snap.contacts[k];
+      tangent::contact_state_t& m = contacts.contacts[static_cast<size_t>(k)];
+      m.body_a = c.body_a;
+      m.body_b = c.body_b;
+      m.surface_a = c.surface_a;
+      m.surface_b = c.surface_b;
+      std::memcpy(m.params, c.u, sizeof(m.params));
+      m.distance = c.beta;
+      std::memcpy(m.point_a, c.p_a, sizeof(m.point_a));
+      std::memcpy(m.point_b, c.p_b, sizeof(m.point_b));
+      m.force = c.force;
+    }
+    lcm->publish(ch.contacts, &contacts);
+    scene_msg.utime = now / 1000;
+    scene_msg.num_bodies = snap.num_bodies;
+    scene_msg.names.resize(static_cast<size_t>(snap.num_bodies));
+    scene_msg.position.resize(static_cast<size_t>(snap.num_bodies), std::vector<double>(3));
+    scene_msg.orientation.resize(static_cast<size_t>(snap.num_bodies), std::vector<double>(4));
+    for (int b = 0; b < snap.num_bodies; ++b) {
+      scene_msg.names[static_cast<size_t>(b)] = sc.mechanism.body(b).name;
+      for (int i = 0; i < 3; ++i) scene_msg.position[static_cast<size_t>(b)][i] = snap.q[b][i];
+      for (int i = 0; i < 4; ++i)
+        scene_msg.orientation[static_cast<size_t>(b)][i] = snap.q[b][3 + i];
+    }
+    std::memcpy(scene_msg.grasp_target, snap.grasp_target, sizeof(scene_msg.grasp_target));
+    lcm->publish(ch.scene, &scene_msg);
+  }
+
+  void PublishStats(int64_t now) {
+    LoopCounters c;
+    engine->counters().Read(&c);
+    engine->compute_histogram().Copy(window_now.data());
+    std::vector<uint64_t> diff(window_now.size());
+    for (size_t b = 0; b < diff.size(); ++b) diff[b] = window_now[b] - window_prev[b];
+    window_prev = window_now;
+    const double seconds = 1e-9 * static_cast<double>(now - last_stats_ns);
+    stats.utime = now / 1000;
+    stats.loop_rate_hz = seconds > 0 ? static_cast<double>(c.ticks - last_ticks) / seconds : 0.0;
+    last_ticks = c.ticks;
+    last_stats_ns = now;
+    stats.ticks = c.ticks;
+    stats.overruns = c.overruns;
+    stats.compute_p50_us = DurationHistogram::Quantile(diff.data(), 0.5);
+    stats.compute_p99_us = DurationHistogram::Quantile(diff.data(), 0.99);
+    stats.compute_max_us = DurationHistogram::Quantile(diff.data(), 1.0);
+    stats.iterations_mean =
+        c.ticks > 0 ? static_cast<double>(c.iterations) / static_cast<double>(c.ticks) : 0.0;
+    stats.max_violation = c.max_violation;
+    stats.num_contacts = c.num_contacts;
+    stats.force_norm = c.force_norm;
+    const DeviceFilterCounts& f = filter.counts();
+    stats.device_messages = f.accepted;
+    stats.rejected_non_finite = f.non_finite;
+    stats.rejected_quaternion = f.quaternion;
+    stats.rejected_sequence = f.sequence;
+    stats.rejected_jump = f.jump;
+    stats.device_timeouts = c.device_timeouts;
+    stats.global_passes = engine->global_passes();
+    stats.global_pass_us = engine->global_histogram().max();
+    stats.contact_events = c.events_applied;
+    stats.events_dropped = c.events_dropped;
+    lcm->publish(ch.stats, &stats);
+    char line[256];
+    std::snprintf(line, sizeof(line),
+                  "t=%.1fs rate=%.0fHz compute p50=%.1fus p99=%.1fus contacts=%d force=%.2fN "
+                  "iter=%.2f violation=%.1e accepted=%lld rejected=%lld timeouts=%lld",
+                  1e-9 * static_cast<double>(now - start_ns), stats.loop_rate_hz,
+                  stats.compute_p50_us, stats.compute_p99_us, stats.num_contacts, stats.force_norm,
+                  stats.iterations_mean, stats.max_violation, static_cast<long long>(f.accepted),
+                  static_cast<long long>(f.non_finite + f.quaternion + f.sequence + f.jump),
+                  static_cast<long long>(c.device_timeouts));
+    if (log) {
+      std::fprintf(log, "%s\n", line);
+      std::fflush(log);
+    }
+    if (status) std::fprintf(stderr, "\r%s", line);
+  }
+};
+
+Bridge::Bridge(Engine* engine, const std::string& url, const Channels& channels, std::FILE* log,
+               bool status_line)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.engine = engine;
+  m.ch = channels;
+  m.log = log;
+  m.status = status_line;
+  m.summary = &summary_;
+  m.lcm = OpenLcm(url);
+  lcm::Subscription* sub = m.lcm->subscribe(channels.device, &Impl::OnDevice, &m);
+  // LCM's default queue of 30 drops the newest messages at high rates: far above it.
+  sub->setQueueCapacity(10000);
+  m.lcm->subscribe(channels.ping, &Impl::OnPing, &m)->setQueueCapacity(10000);
+  m.window_prev.assign(DurationHistogram::kBins + 1, 0);
+  m.window_now.assign(DurationHistogram::kBins + 1, 0);
+}
+
+Bridge::~Bridge() = default;
+
+void Bridge::Run(const std::atomic<bool>& stop, double duration_s) {
+  Impl& m = *impl_;
+  m.start_ns = MonotonicNs();
+  m.last_stats_ns = m.start_ns;
+  int64_t next_scene = m.start_ns, next_stats = m.start_ns + 1000000000LL;
+  pollfd fds[2] = {{m.lcm->getFileno(), POLLIN, 0}, {m.engine->wake_fd(), POLLIN, 0}};
+  while (!stop.load()) {
+    const int64_t now = MonotonicNs();
+    if (duration_s > 0 && now - m.start_ns > static_cast<int64_t>(duration_s * 1e9)) break;
+    const int64_t until = std::min(next_scene, next_stats) - now;
+    const int timeout_ms = static_cast<int>(std::clamp<int64_t>(until / 1000000, 0, 10));
+    fds[0].revents = fds[1].revents = 0;
+    poll(fds, 2, timeout_ms);
+    if (fds[1].revents & POLLIN) {
+      uint64_t count;
+      [[maybe_unused]] const ssize_t r = read(m.engine->wake_fd(), &count, sizeof(count));
+    }
+    m.PublishWrenches();
+    if (fds[0].revents & POLLIN) {
+      while (m.lcm->handleTimeout(0) > 0) {
+        m.PublishWrenches();
+      }
+    }
+    const int64_t t = MonotonicNs();
+    if (t >= next_scene) {
+      m.PublishScene(t);
+      next_scene = t + 33000000LL;
+    }
+    if (t >= next_stats) {
+      m.PublishStats(t);
+      next_stats += 1000000000LL;
+    }
+  }
+  m.PublishWrenches();
+  if (m.status) std::fprintf(stderr, "\n");
+  summary_.filter = m.filter.counts();
+}
+
+std::string Bridge::Report() const {
+  const Impl& m = *impl_;
+  LoopCounters c;
+  m.engine->counters().Read(&c);
+  std::vector<uint64_t> h(DurationHistogram::kBins + 1), g(DurationHistogram::kBins + 1);
+  m.engine->compute_histogram().Copy(h.data());
+  m.engine->global_histogram().Copy(g.data());
+  const DeviceFilterCounts& f = m.filter.counts();
+  std::ostringstream s;
+  const double seconds = 1e-9 * static_cast<double>(MonotonicNs() - m.start_ns);
+  s << "ticks=" << c.ticks << "\nrate_hz=" << static_cast<double>(c.ticks) / seconds
+    << "\nearly_ticks=" << c.early_ticks
+    << "\ncompute_p50_us=" << DurationHistogram::Quantile(h.data(), 0.5)
+    << "\ncompute_p99_us=" << DurationHistogram::Quantile(h.data(), 0.99)
+    << "\ncompute_p999_us=" << DurationHistogram::Quantile(h.data(), 0.999)
+    << "\ncompute_max_us=" << m.engine->compute_histogram().max() << "\noverruns=" << c.overruns
+    << "\nlate=" << c.late << "\niterations_mean="
+    << (c.ticks ? static_cast<double>(c.iterations) / static_cast<double>(c.ticks) : 0.0)
+    << "\ncontacts=" << c.num_contacts << "\ndevice_messages=" << f.accepted
+    << "\nrejected_non_finite=" << f.non_finite << "\nrejected_quaternion=" << f.quaternion
+    << "\nrejected_sequence=" << f.sequence << "\nrejected_jump=" << f.jump
+    << "\ndevice_timeouts=" << c.device_timeouts << "\nwrenches_sent=" << summary_.wrenches_sent
+    << "\nwrenches_dropped=" << c.wrenches_dropped
+    << "\nglobal_passes=" << m.engine->global_passes()
+    << "\nglobal_pass_p50_us=" << DurationHistogram::Quantile(g.data(), 0.5)
+    << "\nglobal_pass_max_us=" << m.engine->global_histogram().max()
+    << "\ncontact_events=" << c.events_applied << "\nevents_dropped=" << c.events_dropped
+    << "\npings_answered=" << summary_.pings << "\n";
+  return s.str();
+}
+
+}  // namespace tangent::server

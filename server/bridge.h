@@ -1,0 +1,68 @@
+#pragma once
+
+// The LCM bridge thread (issue 6): device states in (validated, into the servo's mailbox),
+// wrenches out (as soon as the servo signals one), contacts and scene poses for viewers, loop
+// statistics once per second, and a bare ping-pong responder for latency baselines.
+
+#include <atomic>
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "server/device_filter.h"
+#include "server/engine.h"
+
+namespace lcm {
+class LCM;
+}
+
+namespace tangent::server {
+
+struct Channels {
+  std::string device = "TANGENT_DEVICE";
+  std::string wrench = "TANGENT_WRENCH";
+  std::string contacts = "TANGENT_CONTACTS";
+  std::string stats = "TANGENT_STATS";
+  std::string scene = "TANGENT_SCENE";
+  std::string ping = "TANGENT_PING";  ///< echoed at once on `pong` (bare round-trip baseline)
+  std::string pong = "TANGENT_PONG";
+};
+
+/// Multicast on a non-default group with ttl=0: traffic stays on this host.
+inline constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.68:7668?ttl=0";
+
+/// LCM could not start; the message says why and how to fix it.
+class LcmError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Creates an LCM instance or throws LcmError with the exact fix when multicast is not routed.
+std::unique_ptr<lcm::LCM> OpenLcm(const std::string& url);
+
+struct BridgeSummary {
+  DeviceFilterCounts filter;
+  int64_t wrenches_sent = 0;
+  int64_t pings = 0;
+};
+
+class Bridge {
+ public:
+  Bridge(Engine* engine, const std::string& url, const Channels& channels, std::FILE* log,
+         bool status_line);
+  ~Bridge();
+  /// Runs until *stop (checked every 10 ms) or `duration_s` (> 0) has passed.
+  void Run(const std::atomic<bool>& stop, double duration_s);
+  const BridgeSummary& summary() const { return summary_; }
+  /// The final report (key=value lines), from the engine's and the bridge's counters.
+  std::string Report() const;
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+  BridgeSummary summary_;
+};
+
+}  // namespace tangent::server

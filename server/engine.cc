@@ -1,0 +1,215 @@
+#include "server/engine.h"
+
+#include <pthread.h>
+#include <sched.h>
+#include <sys/eventfd.h>
+#include <sys/prctl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <ctime>
+#include <vector>
+
+namespace tangent::server {
+
+int64_t MonotonicNs() {
+  timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return static_cast<int64_t>(t.tv_sec) * 1000000000LL + t.tv_nsec;
+}
+
+bool PinToCore(int cpu) {
+  if (cpu < 0) return true;
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  CPU_SET(cpu, &set);
+  return pthread_setaffinity_np(pthread_self(), sizeof(set), &set) == 0;
+}
+
+namespace {
+
+void SleepUntil(int64_t t_ns) {
+  timespec ts;
+  ts.tv_sec = static_cast<time_t>(t_ns / 1000000000LL);
+  ts.tv_nsec = static_cast<long>(t_ns % 1000000000LL);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {
+  }
+}
+
+inline void CpuRelax() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#endif
+}
+
+}  // namespace
+
+double DurationHistogram::Quantile(const uint64_t* counts, double q) {
+  const uint64_t total = Total(counts);
+  if (total == 0) return 0.0;
+  const double target = q * static_cast<double>(total);
+  uint64_t seen = 0;
+  for (int b = 0; b <= kBins; ++b) {
+    seen += counts[b];
+    if (static_cast<double>(seen) >= target) return (b + 1) * kBinUs;
+  }
+  return kBins * kBinUs;
+}
+
+uint64_t DurationHistogram::Total(const uint64_t* counts) {
+  uint64_t t = 0;
+  for (int b = 0; b <= kBins; ++b) t += counts[b];
+  return t;
+}
+
+Engine::Engine(Scene* scene, const EngineOptions& options) : scene_(scene), options_(options) {
+  servo_ = std::make_unique<ServoLoop>(scene, options.servo);
+  Snapshot s;
+  servo_->FillSnapshot(&s);
+  snapshot_.Write(s);
+  wake_fd_ = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+}
+
+Engine::~Engine() {
+  Stop();
+  if (wake_fd_ >= 0) close(wake_fd_);
+}
+
+void Engine::Start() {
+  if (running_.exchange(true)) return;
+  servo_thread_ = std::thread([this] { ServoThread(); });
+  global_thread_ = std::thread([this] { GlobalThread(); });
+}
+
+void Engine::Stop() {
+  if (!running_.exchange(false)) return;
+  if (servo_thread_.joinable()) servo_thread_.join();
+  if (global_thread_.joinable()) global_thread_.join();
+}
+
+void Engine::ServoThread() {
+  // Timer slack 1 ns: the default 50 µs lets the kernel coalesce our wake-up that late.
+  prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
+  PinToCore(options_.servo_cpu);
+  const int64_t period = static_cast<int64_t>(1e9 / options_.rate_hz);
+  const int64_t spin = static_cast<int64_t>(options_.spin_us * 1e3);
+  LoopCounters counters;
+  TickResult result;
+  DeviceSample sample;
+  bool have_sample = false;
+  unsigned seen_version = 0;
+  bool was_fresh = false;
+  Snapshot snap;
+  ContactEventMsg event;
+  int64_t next = MonotonicNs() + period;
+  while (running_.load(std::memory_order_relaxed)) {
+    // Hybrid wait: sleep to just before the deadline, then spin; a device state arriving during
+    // the spin is answered at once.
+    if (next - spin > MonotonicNs()) SleepUntil(next - spin);
+    bool early = false;
+    while (MonotonicNs() < next) {
+      if (device_.version() != seen_version) {
+        early = true;
+        break;
+      }
+      CpuRelax();
+    }
+    const int64_t start = MonotonicNs();
+    if (!early && start > next + period) ++counters.overruns;
+    // Contact events from the global stage.
+    while (events_.Pop(&event)) {
+      if (servo_->Apply(event)) {
+        ++counters.events_applied;
+      } else {
+        ++counters.events_dropped;
+      }
+    }
+    const unsigned v = device_.Read(&sample);
+    if (v != 0) {
+      have_sample = true;
+      seen_version = v;
+    }
+    servo_->Tick(have_sample ? &sample : nullptr, start, &result);
+    if (have_sample) {
+      const bool fresh = !result.timed_out;
+      if (was_fresh && !fresh) ++counters.device_timeouts;
+      was_fresh = fresh;
+    }
+    if (result.answered) {
+      if (!wrenches_.Push(result.wrench)) ++counters.wrenches_dropped;
+      const uint64_t one = 1;
+      [[maybe_unused]] const ssize_t w = write(wake_fd_, &one, sizeof(one));
+      counters.force_norm = std::sqrt(result.wrench.force[0] * result.wrench.force[0] +
+                                      result.wrench.force[1] * result.wrench.force[1] +
+                                      result.wrench.force[2] * result.wrench.force[2]);
+    }
+    ++counters.ticks;
+    counters.early_ticks += early;
+    counters.iterations += result.iterations;
+    counters.max_violation = std::max(counters.max_violation, result.violation);
+    counters.num_contacts = result.num_contacts;
+    if ((counters.ticks & 3) == 0 || early) {
+      servo_->FillSnapshot(&snap);
+      snap.events_applied = counters.events_applied + counters.events_dropped;
+      snapshot_.Write(snap);
+    }
+    const int64_t end = MonotonicNs();
+    compute_.Add(1e-3 * static_cast<double>(end - start));
+    if (!early) {
+      if (end > next + period / 2) ++counters.late;
+      next += period;
+      if (end > next + period) {  // fell behind by more than a period: skip ahead
+        next = end + period;
+      }
+    }
+    if ((counters.ticks & 255) == 0) {
+      counters_.Write(counters);
+      counters.max_violation = 0.0;
+    }
+  }
+  counters_.Write(counters);
+}
+
+void Engine::GlobalThread() {
+  prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
+  PinToCore(options_.global_cpu);
+  contact::GlobalContactStage stage(servo_->GlobalSurfaces(), servo_->GlobalPairs(),
+                                    contact::GlobalOptions{});
+  std::vector<contact::BodyPose> poses;
+  std::vector<contact::GlobalContact> tracked;
+  std::vector<contact::ContactEvent> events;
+  Snapshot snap;
+  const int64_t period = static_cast<int64_t>(1e9 / options_.global_rate_hz);
+  int64_t next = MonotonicNs();
+  unsigned last_version = 0;
+  while (running_.load(std::memory_order_relaxed)) {
+    next += period;
+    const unsigned v = snapshot_.Read(&snap);
+    // Wait until the servo has applied every event pushed (else a contact just added would be
+    // found again, untracked).
+    if (v != last_version && snap.events_applied >= events_pushed_.load()) {
+      last_version = v;
+      const int64_t t0 = MonotonicNs();
+      ServoLoop::ToGlobalInput(snap, &poses, &tracked);
+      stage.Run(poses, tracked, &events);
+      for (const contact::ContactEvent& e : events) {
+        ContactEventMsg m;
+        m.added = e.kind == contact::ContactEvent::Kind::kAdded ? 1 : 0;
+        m.surface_a = e.contact.a;
+        m.surface_b = e.contact.b;
+        for (int i = 0; i < 4; ++i) m.u[i] = e.contact.u[i];
+        if (events_.Push(m)) events_pushed_.fetch_add(1);
+      }
+      global_.Add(1e-3 * static_cast<double>(MonotonicNs() - t0));
+      global_passes_.fetch_add(1, std::memory_order_relaxed);
+    }
+    const int64_t now = MonotonicNs();
+    if (next > now) {
+      SleepUntil(next);
+    } else {
+      next = now;
+    }
+  }
+}
+
+}  // namespace tangent::server

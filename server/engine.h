@@ -1,0 +1,121 @@
+#pragma once
+
+// The server's two compute threads (design.md §2): the servo loop on one core (hybrid
+// sleep-then-spin timing, no allocation, no locks, no I/O) and the global contact stage on the
+// other, joined by lock-free mailboxes. The LCM bridge (bridge.h) and the rate benchmark both
+// drive an Engine.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <thread>
+
+#include "server/lockfree.h"
+#include "server/servo.h"
+
+namespace tangent::server {
+
+struct EngineOptions {
+  double rate_hz = 4000.0;  ///< servo ticks per second
+  /// Hybrid timing: sleep (timer slack 1 ns) until this long before each deadline, then spin.
+  /// A new device state arriving during the spin is answered at once (an extra tick).
+  double spin_us = 150.0;
+  int servo_cpu = 0;   ///< core for the servo loop (−1: not pinned)
+  int global_cpu = 1;  ///< core for the global contact stage (−1: not pinned)
+  double global_rate_hz = 1000.0;
+  ServoOptions servo;
+};
+
+/// A histogram of durations in 0.25 µs bins up to 1 ms (plus overflow), written by one thread
+/// with relaxed atomics and read by others (never blocks either).
+class DurationHistogram {
+ public:
+  static constexpr int kBins = 4000;
+  static constexpr double kBinUs = 0.25;
+  void Add(double us) {
+    const int b = us < 0 ? 0 : (us >= kBins * kBinUs ? kBins : static_cast<int>(us / kBinUs));
+    bins_[b].fetch_add(1, std::memory_order_relaxed);
+    const double m = max_.load(std::memory_order_relaxed);
+    if (us > m) max_.store(us, std::memory_order_relaxed);
+  }
+  /// Copies the counts (for windows: subtract an earlier copy).
+  void Copy(uint64_t* out) const {
+    for (int b = 0; b <= kBins; ++b) out[b] = bins_[b].load(std::memory_order_relaxed);
+  }
+  double max() const { return max_.load(std::memory_order_relaxed); }
+  /// Quantile (0..1) of counts (kBins + 1 entries), in µs (upper edge of the bin).
+  static double Quantile(const uint64_t* counts, double q);
+  static uint64_t Total(const uint64_t* counts);
+
+ private:
+  std::atomic<uint64_t> bins_[kBins + 1] = {};
+  std::atomic<double> max_{0.0};
+};
+
+/// Counters the servo publishes every 256 ticks (Seqlock), plus the last wrench's size.
+struct LoopCounters {
+  int64_t ticks = 0;
+  int64_t early_ticks = 0;     ///< extra ticks for a device state that arrived during the spin
+  int64_t overruns = 0;        ///< ticks that started more than one period after their deadline
+  int64_t late = 0;            ///< scheduled ticks that finished after their deadline + ½ period
+  int64_t iterations = 0;      ///< solver iterations, total
+  double max_violation = 0.0;  ///< since the previous publication
+  double force_norm = 0.0;
+  int32_t num_contacts = 0;
+  int64_t device_timeouts = 0;
+  int64_t events_applied = 0;
+  int64_t events_dropped = 0;
+  int64_t wrenches_dropped = 0;
+};
+
+class Engine {
+ public:
+  Engine(Scene* scene, const EngineOptions& options);
+  ~Engine();
+  Engine(const Engine&) = delete;
+  Engine& operator=(const Engine&) = delete;
+
+  void Start();
+  void Stop();
+
+  /// Bridge → servo: the latest accepted device state.
+  Seqlock<DeviceSample>& device() { return device_; }
+  /// Servo → bridge: wrenches answering device states.
+  SpscRing<WrenchSample, 1024>& wrenches() { return wrenches_; }
+  /// Servo → global stage and bridge.
+  const Seqlock<Snapshot>& snapshot() const { return snapshot_; }
+  const Seqlock<LoopCounters>& counters() const { return counters_; }
+  const DurationHistogram& compute_histogram() const { return compute_; }
+  const DurationHistogram& global_histogram() const { return global_; }
+  int64_t global_passes() const { return global_passes_.load(std::memory_order_relaxed); }
+  /// eventfd the servo signals after pushing a wrench (non-blocking write; the bridge polls it).
+  int wake_fd() const { return wake_fd_; }
+  const ServoLoop& servo() const { return *servo_; }
+  const EngineOptions& options() const { return options_; }
+
+ private:
+  void ServoThread();
+  void GlobalThread();
+
+  Scene* scene_;
+  EngineOptions options_;
+  std::unique_ptr<ServoLoop> servo_;
+  Seqlock<DeviceSample> device_;
+  SpscRing<WrenchSample, 1024> wrenches_;
+  SpscRing<ContactEventMsg, 256> events_;
+  Seqlock<Snapshot> snapshot_;
+  Seqlock<LoopCounters> counters_;
+  DurationHistogram compute_, global_;
+  std::atomic<int64_t> global_passes_{0};
+  std::atomic<int64_t> events_pushed_{0};
+  std::atomic<bool> running_{false};
+  std::thread servo_thread_, global_thread_;
+  int wake_fd_ = -1;
+};
+
+/// CLOCK_MONOTONIC in ns.
+int64_t MonotonicNs();
+/// Pins the calling thread to a core (−1: no-op). @return false if the kernel refused.
+bool PinToCore(int cpu);
+
+}  // namespace tangent::server

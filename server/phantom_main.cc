@@ -1,0 +1,295 @@
+// tangent-phantom: a simulated PHANToM-class client in its own process. Publishes device states
+// at 1 kHz while a scripted hand drives the stylus through a hand impedance, applies the
+// wrenches tangentd sends back, and reports round-trip latency (against a bare LCM ping-pong
+// measured in the same run), lost and late answers, forces, and an energy (passivity) check.
+
+#include <sys/prctl.h>
+
+#include <atomic>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <tangent/device_state_t.hpp>
+#include <tangent/loop_stats_t.hpp>
+#include <tangent/wrench_t.hpp>
+
+#include "server/lockfree.h"
+#include "server/phantom.h"
+
+namespace {
+
+using tangent::server::DeviceModel;
+using tangent::server::HandTrajectory;
+using tangent::server::Percentiles;
+
+std::atomic<bool> g_stop{false};
+void OnSignal(int) { g_stop.store(true); }
+
+int64_t NowNs() {
+  timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return static_cast<int64_t>(t.tv_sec) * 1000000000LL + t.tv_nsec;
+}
+
+void SleepUntil(int64_t t_ns) {
+  timespec ts{static_cast<time_t>(t_ns / 1000000000LL), static_cast<long>(t_ns % 1000000000LL)};
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {
+  }
+}
+
+struct LatestWrench {
+  double force[3] = {0, 0, 0};
+  double torque[3] = {0, 0, 0};
+  int64_t seq = -1;
+  int state = 0;
+};
+
+struct Receiver {
+  tangent::server::Seqlock<LatestWrench> wrench;
+  std::vector<double> latency_us, ping_us;
+  std::vector<int64_t> answered_seq;
+  int64_t late = 0, bad = 0;
+  double late_threshold_us = 1000.0;
+  // Loop statistics from tangentd (for the status line).
+  std::atomic<double> loop_rate{0.0};
+  std::atomic<int> contacts{0};
+  std::atomic<double> violation{0.0};
+
+  void OnWrench(const lcm::ReceiveBuffer*, const std::string&, const tangent::wrench_t* m) {
+    const double lat = 1e-3 * static_cast<double>(NowNs() / 1000 * 1000 - m->utime * 1000);
+    latency_us.push_back(lat);
+    if (lat > late_threshold_us) ++late;
+    answered_seq.push_back(m->seq);
+    bool finite = true;
+    for (int i = 0; i < 3; ++i) finite = finite && std::isfinite(m->force[i]);
+    if (!finite) {
+      ++bad;
+      return;
+    }
+    LatestWrench w;
+    std::memcpy(w.force, m->force, sizeof(w.force));
+    std::memcpy(w.torque, m->torque, sizeof(w.torque));
+    w.seq = m->seq;
+    w.state = m->state;
+    wrench.Write(w);
+  }
+  void OnPong(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    if (rbuf->data_size != sizeof(int64_t)) return;
+    int64_t sent;
+    std::memcpy(&sent, rbuf->data, sizeof(sent));
+    ping_us.push_back(1e-3 * static_cast<double>(NowNs() - sent));
+  }
+  void OnStats(const lcm::ReceiveBuffer*, const std::string&, const tangent::loop_stats_t* m) {
+    loop_rate.store(m->loop_rate_hz);
+    contacts.store(m->num_contacts);
+    violation.store(m->max_violation);
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"tangent-phantom: simulated PHANToM client for tangentd"};
+  std::string url = "udpm://239.255.76.68:7668?ttl=0", trajectory = "drag", csv_log;
+  std::string device_ch = "TANGENT_DEVICE", wrench_ch = "TANGENT_WRENCH",
+              stats_ch = "TANGENT_STATS";
+  std::string ping_ch = "TANGENT_PING", pong_ch = "TANGENT_PONG";
+  double duration = 10.0, rate = 1000.0, ping_rate = 100.0, coupling_stiffness = 300.0;
+  double silence_at = -1.0, silence_for = 0.0;
+  int inject_bad = 0;
+  bool status = false;
+  tangent::server::DeviceModelOptions dm;
+  app.add_option("--lcm-url", url, "LCM URL");
+  app.add_option("--trajectory", trajectory,
+                 "built-in hand trajectory (drag, circle, pull, hold) or a CSV file t,x,y,z");
+  app.add_option("--duration", duration, "seconds")->check(CLI::Range(0.1, 3600.0));
+  app.add_option("--rate", rate, "device rate, Hz")->check(CLI::Range(10.0, 10000.0));
+  app.add_option("--ping-rate", ping_rate, "bare LCM ping-pong rate, Hz (0: off)");
+  app.add_option("--log", csv_log, "CSV log of every device step");
+  app.add_option("--coupling-stiffness", coupling_stiffness,
+                 "the server's coupling stiffness (N/m), for the passivity bound");
+  app.add_option("--silence-at", silence_at, "stop publishing at this time (s; timeout test)");
+  app.add_option("--silence-for", silence_for, "... for this long (s)");
+  app.add_option(
+      "--inject-bad", inject_bad,
+      "every N-th message is bad (NaN, non-unit quaternion, repeated seq, jump in turn)");
+  app.add_option("--device-channel", device_ch);
+  app.add_option("--wrench-channel", wrench_ch);
+  app.add_option("--stats-channel", stats_ch);
+  app.add_option("--mass", dm.mass, "device apparent mass, kg");
+  app.add_option("--max-force", dm.max_force, "device force saturation, N");
+  app.add_option("--hand-stiffness", dm.hand_stiffness, "N/m");
+  app.add_option("--hand-damping", dm.hand_damping, "N s/m");
+  app.add_flag("--status", status, "live one-line status with a progress bar");
+  CLI11_PARSE(app, argc, argv);
+
+  HandTrajectory hand;
+  try {
+    std::ifstream f(trajectory);
+    if (f) {
+      std::stringstream text;
+      text << f.rdbuf();
+      hand = HandTrajectory::FromCsv(text.str(), trajectory);
+    } else {
+      hand = HandTrajectory::BuiltIn(trajectory);
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tangent-phantom: %s\n", e.what());
+    return 2;
+  }
+  lcm::LCM lcm(url);
+  if (!lcm.good()) {
+    std::fprintf(stderr,
+                 "tangent-phantom: LCM could not start on \"%s\" (multicast not routed?). Fix, as "
+                 "root: ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo\n",
+                 url.c_str());
+    return 3;
+  }
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  Receiver rx;
+  rx.late_threshold_us = 1e6 / rate;
+  rx.latency_us.reserve(static_cast<size_t>(duration * rate * 1.1) + 16);
+  rx.answered_seq.reserve(rx.latency_us.capacity());
+  lcm.subscribe(wrench_ch, &Receiver::OnWrench, &rx)->setQueueCapacity(10000);
+  lcm.subscribe(pong_ch, &Receiver::OnPong, &rx)->setQueueCapacity(10000);
+  lcm.subscribe(stats_ch, &Receiver::OnStats, &rx);
+  std::atomic<bool> rx_stop{false};
+  std::thread rx_thread([&] {
+    while (!rx_stop.load()) lcm.handleTimeout(5);
+  });
+
+  prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
+  std::FILE* log = csv_log.empty() ? nullptr : std::fopen(csv_log.c_str(), "w");
+  if (log) std::fprintf(log, "t,seq,x,y,z,hand_x,hand_y,hand_z,fx,fy,fz,energy\n");
+  DeviceModel device(dm);
+  const double dt = 1.0 / rate;
+  const int64_t period = static_cast<int64_t>(1e9 / rate);
+  const int64_t start = NowNs();
+  int64_t next = start, seq = 0, sent = 0, sent_live = 0;
+  int64_t next_ping = start;
+  std::vector<Eigen::Vector3d> forces;
+  forces.reserve(static_cast<size_t>(duration * rate) + 16);
+  tangent::device_state_t msg{};
+  Eigen::Vector3d prev_hand = hand.At(0.0);
+  int bar_last = -1;
+  for (int64_t k = 0; !g_stop.load(); ++k) {
+    next += period;
+    // Sleep then spin to the deadline (timer slack 1 ns).
+    if (next - 200000 > NowNs()) SleepUntil(next - 200000);
+    while (NowNs() < next) {
+    }
+    const double t = 1e-9 * static_cast<double>(NowNs() - start);
+    if (t >= duration) break;
+    LatestWrench w;
+    rx.wrench.Read(&w);
+    const Eigen::Vector3d target = hand.At(t);
+    const Eigen::Vector3d hand_v = (target - prev_hand) / dt;
+    prev_hand = target;
+    const Eigen::Vector3d f =
+        device.Step(dt, target, hand_v, Eigen::Vector3d(w.force[0], w.force[1], w.force[2]));
+    forces.push_back(f);
+    const bool silent = silence_at >= 0 && t >= silence_at && t < silence_at + silence_for;
+    if (!silent) {
+      msg.utime = NowNs() / 1000;
+      msg.seq = ++seq;
+      for (int i = 0; i < 3; ++i) {
+        msg.position[i] = device.position()[i];
+        msg.velocity[i] = device.velocity()[i];
+      }
+      msg.orientation[0] = 1.0;
+      msg.orientation[1] = msg.orientation[2] = msg.orientation[3] = 0.0;
+      msg.buttons = 1;
+      if (inject_bad > 0 && seq % inject_bad == 0) {
+        switch ((seq / inject_bad) % 4) {
+          case 0:
+            msg.position[0] = NAN;
+            break;
+          case 1:
+            msg.orientation[0] = 0.5;
+            break;
+          case 2:
+            msg.seq = seq - 1;
+            break;
+          case 3:
+            msg.position[1] += 0.5;
+            break;
+        }
+      } else {
+        ++sent_live;
+      }
+      lcm.publish(device_ch, &msg);
+      ++sent;
+    }
+    if (ping_rate > 0 && NowNs() >= next_ping) {
+      const int64_t now = NowNs();
+      lcm.publish(ping_ch, &now, sizeof(now));
+      next_ping = now + static_cast<int64_t>(1e9 / ping_rate);
+    }
+    if (log) {
+      std::fprintf(log, "%.4f,%lld,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.4f,%.4f,%.4f,%.6e\n", t,
+                   static_cast<long long>(msg.seq), device.position()[0], device.position()[1],
+                   device.position()[2], target[0], target[1], target[2], f[0], f[1], f[2],
+                   device.energy_from_server());
+    }
+    if (status && k % 100 == 0) {
+      const int bar = static_cast<int>(30.0 * t / duration);
+      (void)bar_last;
+      bar_last = bar;
+      std::fprintf(stderr,
+                   "\r[%-30s] %4.1f/%.0fs  loop %5.0f Hz  contacts %d  |F| %.2f N  answered %zu  ",
+                   std::string(static_cast<size_t>(bar), '#').c_str(), t, duration,
+                   rx.loop_rate.load(), rx.contacts.load(), f.norm(), rx.latency_us.size());
+    }
+  }
+  // Let the last answers arrive.
+  SleepUntil(NowNs() + 50000000LL);
+  rx_stop.store(true);
+  rx_thread.join();
+  if (status) std::fprintf(stderr, "\n");
+  if (log) std::fclose(log);
+
+  const Percentiles lat = Percentiles::Of(rx.latency_us);
+  const Percentiles ping = Percentiles::Of(rx.ping_us);
+  const int64_t answered = static_cast<int64_t>(rx.answered_seq.size());
+  const int64_t lost = std::max<int64_t>(0, sent_live - answered);
+  double mean_force = 0.0;
+  for (const auto& f : forces) mean_force += f.norm();
+  mean_force /= std::max<size_t>(1, forces.size());
+  const double roughness = tangent::server::ForceRoughness(forces);
+  const double bound = dm.max_force * dm.max_force / (2.0 * coupling_stiffness) + 1e-3;
+  const bool passive = device.energy_from_server() <= bound;
+  const bool smooth = roughness < 0.05;
+  std::printf("tangent-phantom summary (%s, %.1f s at %.0f Hz):\n", hand.name().c_str(), duration,
+              rate);
+  std::printf("sent=%lld\nanswered=%lld\nlost=%lld\nlate=%lld\nbad_wrenches=%lld\n",
+              static_cast<long long>(sent), static_cast<long long>(answered),
+              static_cast<long long>(lost), static_cast<long long>(rx.late),
+              static_cast<long long>(rx.bad));
+  std::printf(
+      "latency_p50_us=%.1f\nlatency_p99_us=%.1f\nlatency_p999_us=%.1f\nlatency_max_us=%.1f\n",
+      lat.p50, lat.p99, lat.p999, lat.max);
+  std::printf("ping_p50_us=%.1f\nping_p99_us=%.1f\nping_n=%zu\nlatency_minus_ping_p50_us=%.1f\n",
+              ping.p50, ping.p99, ping.n, lat.p50 - ping.p50);
+  std::printf("force_mean_n=%.3f\nforce_max_n=%.3f\nforce_roughness_n=%.4f\n", mean_force,
+              device.max_applied_force(), roughness);
+  std::printf("energy_from_server_j=%.5f\npassivity_bound_j=%.5f\n", device.energy_from_server(),
+              bound);
+  std::printf("loop_rate_hz=%.0f\ncontacts=%d\n", rx.loop_rate.load(), rx.contacts.load());
+  std::printf("verdict=%s\n", passive && smooth && answered > 0 ? "STABLE" : "UNSTABLE");
+  std::printf(
+      "%s: energy from the server %.2f mJ (bound %.2f mJ: %s), force roughness %.4f N "
+      "(%s), round trip p50 %.0f us vs bare LCM ping %.0f us\n",
+      passive && smooth && answered > 0 ? "STABLE" : "UNSTABLE", 1e3 * device.energy_from_server(),
+      1e3 * bound, passive ? "passive" : "NOT passive", roughness,
+      smooth ? "smooth" : "oscillating", lat.p50, ping.p50);
+  return 0;
+}

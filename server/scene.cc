@@ -1,0 +1,456 @@
+#include "server/scene.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+
+#include "nurbs/json_io.h"
+#include "nurbs/primitives.h"
+#include "optimizer/goals.h"
+#include "optimizer/joints.h"
+
+namespace tangent::server {
+
+namespace {
+
+using nlohmann::json;
+
+// A JSON value with its path for messages ("scenes/x.json: bodies[1].mass: ...").
+struct Node {
+  const json& j;
+  std::string where;  // file
+  std::string path;   // inside the file
+
+  [[noreturn]] void Fail(const std::string& what) const {
+    throw SceneError(where + ": " + (path.empty() ? "" : path + ": ") + what);
+  }
+  bool Has(const std::string& key) const { return j.is_object() && j.contains(key); }
+  Node At(const std::string& key) const {
+    if (!j.is_object()) Fail("must be an object");
+    if (!j.contains(key)) Fail("missing \"" + key + "\"");
+    return {j.at(key), where, path.empty() ? key : path + "." + key};
+  }
+  Node At(size_t i) const { return {j.at(i), where, path + "[" + std::to_string(i) + "]"}; }
+  size_t Size() const {
+    if (!j.is_array()) Fail("must be an array");
+    return j.size();
+  }
+  double Number() const {
+    if (!j.is_number()) Fail("must be a number");
+    const double x = j.get<double>();
+    if (!std::isfinite(x)) Fail("must be finite");
+    return x;
+  }
+  double Number(const std::string& key, double fallback) const {
+    return Has(key) ? At(key).Number() : fallback;
+  }
+  double Positive(const std::string& key, double fallback) const {
+    const double x = Number(key, fallback);
+    if (!(x > 0.0)) At(key).Fail("must be positive, got " + Format(x));
+    return x;
+  }
+  std::string String() const {
+    if (!j.is_string()) Fail("must be a string");
+    return j.get<std::string>();
+  }
+  std::string String(const std::string& key, const std::string& fallback) const {
+    return Has(key) ? At(key).String() : fallback;
+  }
+  bool Bool(const std::string& key, bool fallback) const {
+    if (!Has(key)) return fallback;
+    const Node n = At(key);
+    if (!n.j.is_boolean()) n.Fail("must be true or false");
+    return n.j.get<bool>();
+  }
+  template <int N>
+  Eigen::Matrix<double, N, 1> Vector() const {
+    if (!j.is_array() || static_cast<int>(j.size()) != N) {
+      Fail("must be an array of " + std::to_string(N) + " numbers");
+    }
+    Eigen::Matrix<double, N, 1> v;
+    for (int i = 0; i < N; ++i) v[i] = At(static_cast<size_t>(i)).Number();
+    return v;
+  }
+  static std::string Format(double x) {
+    std::ostringstream s;
+    s << x;
+    return s.str();
+  }
+};
+
+Eigen::Quaterniond Quaternion(const Node& n) {
+  const Eigen::Vector4d q = n.Vector<4>();
+  if (std::abs(q.norm() - 1.0) > 1e-6) {
+    n.Fail("must be a unit quaternion (w, x, y, z), its norm is " + Node::Format(q.norm()));
+  }
+  return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized();
+}
+
+Eigen::Isometry3d Placement(const Node& n, double unit) {
+  Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
+  if (n.Has("position")) x.translation() = unit * n.At("position").Vector<3>();
+  if (n.Has("quaternion")) x.linear() = Quaternion(n.At("quaternion")).toRotationMatrix();
+  return x;
+}
+
+nurbs::NurbsSurface MakeSurface(const Node& n, double unit, const std::string& base_dir) {
+  const std::string type = n.At("type").String();
+  try {
+    if (type == "paperclip") {
+      const double r = n.Number("wire_radius", nurbs::kPaperclipWireRadius / unit) * unit;
+      if (!(r > 0.0)) n.At("wire_radius").Fail("must be positive");
+      return nurbs::MakeTube(nurbs::PaperclipPath(), r);
+    }
+    if (type == "sphere") {
+      return nurbs::MakeSphere(
+          unit * (n.Has("center") ? n.At("center").Vector<3>() : Eigen::Vector3d::Zero()),
+          unit * n.Positive("radius", 0.0));
+    }
+    if (type == "cylinder") {
+      return nurbs::MakeCylinder(unit * n.Positive("radius", 0.0),
+                                 unit * n.Positive("height", 0.0));
+    }
+    if (type == "torus") {
+      const double R = unit * n.Positive("major", 0.0), r = unit * n.Positive("minor", 0.0);
+      if (!(r < R)) n.At("minor").Fail("must be less than \"major\"");
+      return nurbs::MakeTorus(R, r);
+    }
+    if (type == "plane_patch") {
+      return nurbs::MakePlanePatch(unit * n.At("origin").Vector<3>(),
+                                   unit * n.At("edge_u").Vector<3>(),
+                                   unit * n.At("edge_v").Vector<3>());
+    }
+    if (type == "sheared_patch") {
+      return nurbs::MakeShearedPatch(n.Positive("angle_deg", 0.0) * std::numbers::pi / 180.0,
+                                     unit * n.Positive("size", 0.0), unit * n.Number("bump", 0.0),
+                                     n.Bool("rational", false));
+    }
+    if (type == "height_grid") {
+      const Node h = n.At("heights");
+      std::vector<std::vector<double>> heights(h.Size());
+      for (size_t i = 0; i < heights.size(); ++i) {
+        const Node row = h.At(i);
+        for (size_t k = 0; k < row.Size(); ++k) heights[i].push_back(unit * row.At(k).Number());
+        if (heights[i].size() != heights[0].size()) row.Fail("rows must have equal lengths");
+      }
+      if (heights.size() < 4 || heights[0].size() < 4) h.Fail("needs at least 4 x 4 heights");
+      const Eigen::Vector2d lo = unit * n.At("corner").Vector<2>();
+      const Eigen::Vector2d size = unit * n.At("size").Vector<2>();
+      if (!(size.minCoeff() > 0.0)) n.At("size").Fail("must be positive");
+      return nurbs::MakeHeightGridPatch(lo[0], lo[1], size[0], size[1], heights);
+    }
+    if (type == "nurbs") {  // metres, from a file or inline (nurbs/json_io format)
+      if (n.Has("file")) {
+        std::filesystem::path p = n.At("file").String();
+        if (p.is_relative()) p = std::filesystem::path(base_dir) / p;
+        return nurbs::LoadSurface(p.string());
+      }
+      return nurbs::SurfaceFromJson(n.At("nurbs").j, n.where + ": " + n.path + ".nurbs");
+    }
+  } catch (const SceneError&) {
+    throw;
+  } catch (const std::exception& e) {
+    n.Fail(e.what());
+  }
+  n.At("type").Fail("unknown surface type \"" + type +
+                    "\" (paperclip, sphere, cylinder, torus, plane_patch, sheared_patch, "
+                    "height_grid, nurbs)");
+}
+
+optimizer::Attachment ParseAttachment(const Node& n, const Scene& s, double unit) {
+  optimizer::Attachment a;
+  const std::string body = n.At("body").String();
+  a.body = s.BodyIndex(body);
+  if (a.body < 0) n.At("body").Fail("no body named \"" + body + "\"");
+  if (n.Has("point")) a.point = unit * n.At("point").Vector<3>();
+  if (n.Has("axis")) {
+    a.axis = n.At("axis").Vector<3>();
+    if (!(a.axis.norm() > 0.0)) n.At("axis").Fail("must not be zero");
+    a.axis.normalize();
+  }
+  if (n.Has("reference")) {
+    a.reference = n.At("reference").Vector<3>();
+    if (!(a.reference.norm() > 0.0)) n.At("reference").Fail("must not be zero");
+    a.reference.normalize();
+  }
+  return a;
+}
+
+}  // namespace
+
+int Scene::BodyIndex(const std::string& n) const {
+  for (int i = 0; i < mechanism.num_bodies(); ++i) {
+    if (mechanism.body(i).name == n) return i;
+  }
+  return -1;
+}
+
+int Scene::SurfaceIndex(const std::string& n) const {
+  for (size_t i = 0; i < surfaces.size(); ++i) {
+    if (surfaces[i].name == n) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& where,
+                                  const std::string& base_dir) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw SceneError(where + ": not valid JSON: " + e.what());
+  }
+  const Node root{j, where, ""};
+  if (!j.is_object()) root.Fail("a scene must be a JSON object");
+  auto scene = std::make_unique<Scene>();
+  Scene& s = *scene;
+  s.path = where;
+  s.name = root.String("name", where);
+  const std::string unit_name = root.String("length_unit", "m");
+  double unit = 1.0;
+  if (unit_name == "mm") {
+    unit = 1e-3;
+  } else if (unit_name == "cm") {
+    unit = 1e-2;
+  } else if (unit_name != "m") {
+    root.At("length_unit").Fail("must be \"m\", \"cm\" or \"mm\", got \"" + unit_name + "\"");
+  }
+
+  // Bodies.
+  const Node bodies = root.At("bodies");
+  if (bodies.Size() == 0) bodies.Fail("a scene needs at least one body");
+  for (size_t i = 0; i < bodies.Size(); ++i) {
+    const Node b = bodies.At(i);
+    optimizer::Body body;
+    body.name = b.At("name").String();
+    if (s.BodyIndex(body.name) >= 0) b.At("name").Fail("duplicate body name \"" + body.name + "\"");
+    body.fixed = b.Bool("fixed", false);
+    const Eigen::Isometry3d x = Placement(b, unit);
+    const Eigen::Quaterniond q(x.rotation());
+    body.pose << x.translation(), q.w(), q.x(), q.y(), q.z();
+    body.mass = b.Positive("mass", 1.0);
+    if (b.Has("inertia")) {
+      const Eigen::Vector3d d = b.At("inertia").Vector<3>();
+      if (!(d.minCoeff() > 0.0)) b.At("inertia").Fail("principal moments must be positive");
+      body.inertia = d.asDiagonal();
+    }
+    body.rigidity = b.Number("rigidity", 1.0);
+    if (body.rigidity < 0.0) b.At("rigidity").Fail("must not be negative");
+    try {
+      s.mechanism.AddBody(body);
+    } catch (const std::exception& e) {
+      b.Fail(e.what());
+    }
+  }
+  if (s.mechanism.num_moving() == 0) bodies.Fail("no moving body: nothing to manipulate");
+
+  // Surfaces.
+  const Node surfaces = root.At("surfaces");
+  for (size_t i = 0; i < surfaces.Size(); ++i) {
+    const Node n = surfaces.At(i);
+    const std::string name = n.At("name").String();
+    if (s.SurfaceIndex(name) >= 0) n.At("name").Fail("duplicate surface name \"" + name + "\"");
+    const std::string body = n.At("body").String();
+    const int b = s.BodyIndex(body);
+    if (b < 0) n.At("body").Fail("no body named \"" + body + "\"");
+    const nurbs::NurbsSurface local = MakeSurface(n, unit, base_dir);
+    Eigen::Isometry3d X = Placement(n, unit);
+    if (n.Has("centre_at")) {
+      // Place the surface so its parameter-domain centre lands on this body-frame point.
+      if (n.Has("position")) n.At("centre_at").Fail("give either \"position\" or \"centre_at\"");
+      const double u = 0.5 * (local.knots_u().domain_begin() + local.knots_u().domain_end());
+      const double v = 0.5 * (local.knots_v().domain_begin() + local.knots_v().domain_end());
+      X.translation() =
+          unit * n.At("centre_at").Vector<3>() - X.linear() * local.Evaluate(u, v, 0).S;
+    }
+    s.surfaces.push_back(SceneSurface{name, b, nurbs::Transformed(local, X), {}, false});
+  }
+
+  // Joints.
+  if (root.Has("joints")) {
+    const Node joints = root.At("joints");
+    for (size_t i = 0; i < joints.Size(); ++i) {
+      const Node n = joints.At(i);
+      JointSpec js;
+      js.type = n.At("type").String();
+      const optimizer::Attachment a = ParseAttachment(n.At("a"), s, unit);
+      const optimizer::Attachment b = ParseAttachment(n.At("b"), s, unit);
+      if (a.body == b.body) n.Fail("joins a body to itself");
+      if (js.type == "spherical") {
+        js.term = optimizer::SphericalJoint(a, b);
+      } else if (js.type == "revolute") {
+        js.term = optimizer::RevoluteJoint(a, b);
+      } else if (js.type == "universal") {
+        js.term = optimizer::UniversalJoint(a, b);
+      } else if (js.type == "cylindrical") {
+        js.term = optimizer::CylindricalJoint(a, b);
+      } else if (js.type == "prismatic") {
+        js.term = optimizer::PrismaticJoint(a, b);
+      } else if (js.type == "fixed") {
+        js.term = optimizer::FixedJoint(a, b);
+      } else {
+        n.At("type").Fail("unknown joint type \"" + js.type +
+                          "\" (spherical, revolute, universal, cylindrical, prismatic, fixed)");
+      }
+      if (n.Has("limits_deg")) {
+        if (js.type != "revolute") n.At("limits_deg").Fail("limits apply to revolute joints only");
+        const Eigen::Vector2d l = n.At("limits_deg").Vector<2>() * std::numbers::pi / 180.0;
+        if (!(l[0] < l[1])) n.At("limits_deg").Fail("lower limit must be below the upper");
+        js.limits = optimizer::RevoluteLimits(a, b, l[0], l[1]);
+      }
+      s.joints.push_back(std::move(js));
+    }
+  }
+
+  // Contact pairs that may occur.
+  if (root.Has("contacts")) {
+    const Node contacts = root.At("contacts");
+    std::set<std::pair<int, int>> seen;
+    for (size_t i = 0; i < contacts.Size(); ++i) {
+      const Node n = contacts.At(i);
+      ContactPairSpec c;
+      for (const char* key : {"a", "b"}) {
+        const std::string name = n.At(key).String();
+        const int k = s.SurfaceIndex(name);
+        if (k < 0) n.At(key).Fail("no surface named \"" + name + "\"");
+        (key[0] == 'a' ? c.surface_a : c.surface_b) = k;
+      }
+      const SceneSurface& sa = s.surfaces[static_cast<size_t>(c.surface_a)];
+      const SceneSurface& sb = s.surfaces[static_cast<size_t>(c.surface_b)];
+      if (sa.body == sb.body)
+        n.Fail("both surfaces are on body \"" + s.mechanism.body(sa.body).name + "\"");
+      if (s.mechanism.body(sa.body).fixed && s.mechanism.body(sb.body).fixed) {
+        n.Fail("both surfaces are on fixed bodies: they can never meet");
+      }
+      if (!seen.insert({std::min(c.surface_a, c.surface_b), std::max(c.surface_a, c.surface_b)})
+               .second) {
+        n.Fail("pair declared twice");
+      }
+      const std::string kind = n.String("kind", "unilateral");
+      if (kind == "floating") {
+        c.kind = ContactPairSpec::Kind::kFloating;
+        c.max_contacts = 1;
+      } else if (kind != "unilateral") {
+        n.At("kind").Fail("must be \"unilateral\" or \"floating\", got \"" + kind + "\"");
+      }
+      if (n.Has("max_contacts")) {
+        const double m = n.At("max_contacts").Number();
+        if (!(m >= 1 && m <= 8 && m == std::floor(m))) {
+          n.At("max_contacts").Fail("must be an integer from 1 to 8");
+        }
+        c.max_contacts = static_cast<int>(m);
+      }
+      s.surfaces[static_cast<size_t>(c.surface_a)].watched = true;
+      s.surfaces[static_cast<size_t>(c.surface_b)].watched = true;
+      s.pairs.push_back(c);
+    }
+  }
+
+  // Grasp.
+  {
+    const Node g = root.At("grasp");
+    const std::string body = g.At("body").String();
+    s.grasp.body = s.BodyIndex(body);
+    if (s.grasp.body < 0) g.At("body").Fail("no body named \"" + body + "\"");
+    if (s.mechanism.body(s.grasp.body).fixed) g.At("body").Fail("the grasped body is fixed");
+    if (g.Has("point")) s.grasp.point = unit * g.At("point").Vector<3>();
+    s.grasp.hold_orientation = g.Number("hold_orientation", 0.0);
+    if (s.grasp.hold_orientation < 0.0) g.At("hold_orientation").Fail("must not be negative");
+    s.grasp.rotational_stiffness = g.Positive("rotational_stiffness", s.grasp.rotational_stiffness);
+  }
+
+  // Objectives (weighted goals besides the grasp).
+  if (root.Has("objectives")) {
+    const Node objectives = root.At("objectives");
+    for (size_t i = 0; i < objectives.Size(); ++i) {
+      const Node n = objectives.At(i);
+      const std::string type = n.At("type").String();
+      const double w = n.Number("weight", 1.0);
+      if (!(w >= 0.0)) n.At("weight").Fail("must not be negative");
+      const optimizer::Attachment a = ParseAttachment(n, s, unit);
+      if (type == "hold_orientation") {
+        const contact::Vector7d& pose = s.mechanism.body(a.body).pose;
+        s.objectives.push_back(
+            {optimizer::OrientationGoal(
+                 a.body, Eigen::Quaterniond(pose[3], pose[4], pose[5], pose[6]).toRotationMatrix(),
+                 Eigen::Vector3d::Ones()),
+             w});
+      } else if (type == "position") {
+        s.objectives.push_back({optimizer::PositionGoal(a, unit * n.At("target").Vector<3>()), w});
+      } else if (type == "plane") {
+        s.objectives.push_back({optimizer::PlaneGoal(a, unit * n.At("origin").Vector<3>(),
+                                                     n.At("normal").Vector<3>().normalized()),
+                                w});
+      } else {
+        n.At("type").Fail("unknown objective \"" + type + "\" (hold_orientation, position, plane)");
+      }
+    }
+  }
+
+  // Device mapping and coupling.
+  if (root.Has("device")) {
+    const Node d = root.At("device");
+    DeviceSpec& dv = s.device;
+    dv.scale = d.Positive("scale", 1.0);
+    if (d.Has("origin")) {
+      dv.origin = unit * d.At("origin").Vector<3>();
+      dv.origin_given = true;
+    }
+    if (d.Has("quaternion")) dv.rotation = Quaternion(d.At("quaternion")).toRotationMatrix();
+    if (d.Has("tool_offset")) dv.tool_offset = d.At("tool_offset").Vector<3>();
+    dv.stiffness = d.Positive("stiffness", dv.stiffness);
+    dv.damping = d.Positive("damping", dv.damping);
+    dv.max_force = d.Positive("max_force", dv.max_force);
+    dv.rated_stiffness = d.Positive("rated_stiffness", dv.rated_stiffness);
+    dv.device_rate = d.Positive("device_rate", dv.device_rate);
+    dv.max_force_rate = d.Positive("max_force_rate", dv.max_force_rate);
+    dv.ramp_time = d.Number("ramp_time", dv.ramp_time);
+    if (dv.ramp_time < 0.0) d.At("ramp_time").Fail("must not be negative");
+    // Passivity of the virtual coupling rendered by a sampled device (Colgate): k < 2b/T, and
+    // never above what the device itself can render.
+    const double limit = 2.0 * dv.damping * dv.device_rate;
+    if (dv.stiffness > limit) {
+      d.At("stiffness")
+          .Fail("exceeds the passivity limit 2 damping / period = " + Node::Format(limit) +
+                " N/m (damping " + Node::Format(dv.damping) + " N s/m at " +
+                Node::Format(dv.device_rate) + " Hz)");
+    }
+    if (dv.stiffness > dv.rated_stiffness) {
+      d.At("stiffness")
+          .Fail("exceeds the device's rated stiffness " + Node::Format(dv.rated_stiffness) +
+                " N/m");
+    }
+  }
+
+  if (root.Has("offset")) {
+    const Node o = root.At("offset");
+    s.offset_tolerance = o.Positive("tolerance", s.offset_tolerance / unit) * unit;
+    s.offset_margin = o.Positive("margin", s.offset_margin / unit) * unit;
+  }
+  // Offset meshes for the surfaces the global stage watches, certified (load log).
+  for (SceneSurface& sf : s.surfaces) {
+    if (!sf.watched) continue;
+    sf.mesh = nurbs::MakeOffsetMesh(sf.surface, s.offset_tolerance, s.offset_margin,
+                                    /*max_edge=*/0.5e-3);
+    s.load_log.push_back(nurbs::CertifyOffsetMesh(sf.surface, sf.mesh, 60).Report(sf.name));
+  }
+  return scene;
+}
+
+std::unique_ptr<Scene> LoadScene(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw SceneError(path + ": cannot open the scene file");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string dir = std::filesystem::path(path).parent_path().string();
+  return ParseScene(text.str(), path, dir.empty() ? "." : dir);
+}
+
+}  // namespace tangent::server

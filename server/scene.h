@@ -1,0 +1,108 @@
+#pragma once
+
+// Scene files (JSON): bodies made of NURBS surfaces, joints, the surface pairs that may touch,
+// the grasp, objectives and the device mapping. docs/server.md "Scene files" is the reference.
+
+#include <deque>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "nurbs/offset.h"
+#include "nurbs/surface.h"
+#include "optimizer/mechanism.h"
+#include "optimizer/term.h"
+
+namespace tangent::server {
+
+/// A scene file error: the message names the file and the offending item
+/// ("scenes/x.json: bodies[1].mass: must be positive, got -2").
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct SceneSurface {
+  std::string name;
+  int body = 0;
+  nurbs::NurbsSurface surface;  ///< in the body's frame, metres
+  nurbs::OffsetMesh mesh;       ///< offset mesh for the global stage (built for declared pairs)
+  bool watched = false;         ///< in a declared contact pair
+};
+
+struct ContactPairSpec {
+  int surface_a = 0, surface_b = 0;
+  /// Non-penetration (β ≥ 0, contacts found and retired by the global stage), or a floating
+  /// contact (β = 0, must touch at the initial poses and always kept).
+  enum class Kind { kUnilateral, kFloating } kind = Kind::kUnilateral;
+  int max_contacts = 2;  ///< contact slots reserved for this pair (unilateral)
+};
+
+struct JointSpec {
+  std::string type;  ///< spherical, revolute, universal, cylindrical, prismatic, fixed
+  optimizer::TermPtr term;
+  optimizer::TermPtr limits;  ///< revolute limits (may be null)
+};
+
+struct ObjectiveSpec {
+  optimizer::TermPtr term;
+  double weight = 1.0;
+};
+
+struct GraspSpec {
+  int body = -1;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< grasp point, body frame, metres
+  /// Weight of the grasped body's orientation toward its initial orientation (3-DOF devices:
+  /// keeps the grasped part from spinning about the grasp point), relative to the grasp.
+  double hold_orientation = 0.0;
+  /// 6-DOF devices: rotational coupling stiffness, N·m/rad.
+  double rotational_stiffness = 0.02;
+};
+
+/// Device workspace → scene: p_W = origin + scale · R (p_device + R_stylus tool_offset).
+struct DeviceSpec {
+  double scale = 1.0;
+  /// World point of the device origin, m; when the scene gives none, the grasp point at rest
+  /// (the stylus starts where the part is held).
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  bool origin_given = false;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d tool_offset = Eigen::Vector3d::Zero();  ///< stylus frame, device metres
+  double stiffness = 300.0;                               ///< virtual coupling, N/m at the hand
+  double damping = 1.0;                                   ///< N·s/m at the hand
+  double max_force = 3.3;                                 ///< N (a Touch-class device's saturation)
+  double rated_stiffness = 500.0;                         ///< the device's own limit, N/m
+  double device_rate = 1000.0;    ///< Hz, the rate the device renders our force at
+  double max_force_rate = 500.0;  ///< N/s
+  double ramp_time = 1.0;         ///< s, force ramp at start-up and after a timeout
+};
+
+struct Scene {
+  std::string name;
+  std::string path;
+  optimizer::Mechanism mechanism;
+  std::deque<SceneSurface> surfaces;  ///< stable addresses
+  std::vector<JointSpec> joints;
+  std::vector<ContactPairSpec> pairs;
+  std::vector<ObjectiveSpec> objectives;
+  GraspSpec grasp;
+  DeviceSpec device;
+  double offset_tolerance = 20e-6;    ///< tessellation bound of offset meshes, m
+  double offset_margin = 0.25e-3;     ///< m
+  std::vector<std::string> load_log;  ///< certification lines etc.
+
+  /// Index of a body or surface by name, -1 if none.
+  int BodyIndex(const std::string& name) const;
+  int SurfaceIndex(const std::string& name) const;
+};
+
+/// Parses a scene. `where` names the source in error messages. @throws SceneError.
+std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& where,
+                                  const std::string& base_dir = ".");
+/// Loads a scene file (NURBS files it names are resolved relative to it). @throws SceneError.
+std::unique_ptr<Scene> LoadScene(const std::string& path);
+
+}  // namespace tangent::server

@@ -1,0 +1,398 @@
+#include "server/servo.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "contact/rigid.h"
+#include "optimizer/joints.h"
+
+namespace tangent::server {
+
+namespace {
+
+// Parameter distance between two (u, v, s, t), periodic directions wrapped (domain [0, 1]
+// assumed for periodic directions' width through the knot domain).
+double ParameterDistance(const nurbs::NurbsSurface& a, const nurbs::NurbsSurface& b,
+                         const Eigen::Vector4d& x, const Eigen::Vector4d& y) {
+  const nurbs::NurbsSurface* s[4] = {&a, &a, &b, &b};
+  double d = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    const bool u_dir = i % 2 == 0;
+    const auto& kv = u_dir ? s[i]->knots_u() : s[i]->knots_v();
+    const double w = kv.domain_end() - kv.domain_begin();
+    double e = std::abs(x[i] - y[i]);
+    if (u_dir ? s[i]->periodic_u() : s[i]->periodic_v()) e = std::min(e, w - e);
+    d = std::max(d, e / w);
+  }
+  return d;
+}
+
+// Closest pair of n x n parameter samples of two placed surfaces (cell centres).
+Eigen::Vector4d ClosestSamples(const nurbs::NurbsSurface& f, const contact::BodyPose& pf,
+                               const nurbs::NurbsSurface& g, const contact::BodyPose& pg, int n,
+                               double* distance) {
+  auto grid = [n](const nurbs::NurbsSurface& s, const contact::BodyPose& p) {
+    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector3d>> pts;
+    const auto& ku = s.knots_u();
+    const auto& kv = s.knots_v();
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        const double u = ku.domain_begin() + (ku.domain_end() - ku.domain_begin()) * (i + 0.5) / n;
+        const double v = kv.domain_begin() + (kv.domain_end() - kv.domain_begin()) * (j + 0.5) / n;
+        pts.push_back({{u, v}, p.Point(s.Evaluate(u, v, 0).S)});
+      }
+    }
+    return pts;
+  };
+  const auto a = grid(f, pf), b = grid(g, pg);
+  double best = 1e300;
+  Eigen::Vector4d seed = Eigen::Vector4d::Constant(0.5);
+  for (const auto& x : a) {
+    for (const auto& y : b) {
+      const double d = (x.second - y.second).squaredNorm();
+      if (d < best) {
+        best = d;
+        seed << x.first, y.first;
+      }
+    }
+  }
+  *distance = std::sqrt(best);
+  return seed;
+}
+
+}  // namespace
+
+ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene), options_(options) {
+  if (options.dof != 3 && options.dof != 6) {
+    throw SceneError("device: dof must be 3 or 6, got " + std::to_string(options.dof));
+  }
+  if (scene->mechanism.num_bodies() > kMaxBodies) {
+    throw SceneError(scene->path + ": more than " + std::to_string(kMaxBodies) + " bodies");
+  }
+  problem_ = std::make_unique<optimizer::Problem>(scene->mechanism);
+  optimizer::Problem& p = *problem_;
+  for (const JointSpec& j : scene->joints) {
+    p.AddEquality(j.term);
+    if (j.limits) p.AddInequality(j.limits);
+  }
+  q_ = scene->mechanism.InitialCoordinates();
+  scene->mechanism.Poses(q_, &poses_);
+
+  // Contacts present at the initial poses: one cold global pass.
+  std::vector<contact::ContactEvent> events;
+  {
+    contact::GlobalContactStage stage(GlobalSurfaces(), GlobalPairs(), contact::GlobalOptions{});
+    stage.Run(poses_, {}, &events);
+  }
+  int slot_count = 0;
+  for (size_t k = 0; k < scene->pairs.size(); ++k) {
+    const ContactPairSpec& pair = scene->pairs[k];
+    slot_count += pair.max_contacts;
+  }
+  if (slot_count > kMaxContacts) {
+    throw SceneError(scene->path + ": the contact pairs reserve " + std::to_string(slot_count) +
+                     " contact slots, more than " + std::to_string(kMaxContacts));
+  }
+  for (size_t k = 0; k < scene->pairs.size(); ++k) {
+    const ContactPairSpec& pair = scene->pairs[k];
+    const SceneSurface& sa = scene->surfaces[static_cast<size_t>(pair.surface_a)];
+    const SceneSurface& sb = scene->surfaces[static_cast<size_t>(pair.surface_b)];
+    const int lo = std::min(pair.surface_a, pair.surface_b);
+    const int hi = std::max(pair.surface_a, pair.surface_b);
+    const SceneSurface& f = scene->surfaces[static_cast<size_t>(lo)];
+    const SceneSurface& g = scene->surfaces[static_cast<size_t>(hi)];
+    if (pair.kind == ContactPairSpec::Kind::kFloating) {
+      const contact::ContactEvent* found = nullptr;
+      for (const auto& e : events) {
+        if (e.contact.a == lo && e.contact.b == hi && e.kind == contact::ContactEvent::Kind::kAdded)
+          found = &e;
+      }
+      Eigen::Vector4d seed;
+      if (found) {
+        seed = found->contact.u;
+      } else {
+        // Not touching yet: the closest pair of samples, if near enough for the settling solve
+        // to bring the surfaces together.
+        double d = 0.0;
+        seed = ClosestSamples(f.surface, poses_[static_cast<size_t>(f.body)], g.surface,
+                              poses_[static_cast<size_t>(g.body)], 40, &d);
+        if (d > 5e-3) {
+          throw SceneError(scene->path + ": floating contact between \"" + sa.name + "\" and \"" +
+                           sb.name + "\": the surfaces are " + std::to_string(d * 1e3) +
+                           " mm apart at the initial poses (at most 5 mm)");
+        }
+      }
+      auto term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface, seed);
+      p.AddEquality(term);
+      slots_.push_back({static_cast<int>(k), -1, true, term});
+      continue;
+    }
+    for (int m = 0; m < pair.max_contacts; ++m) {
+      auto term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface,
+                                                Eigen::Vector4d::Constant(0.5));
+      term->Deactivate();
+      const int index = p.AddInequality(term);
+      slots_.push_back(
+          {static_cast<int>(k), p.inequalities()[static_cast<size_t>(index)].row, false, term});
+    }
+  }
+  for (const auto& e : events) {
+    ContactEventMsg msg;
+    msg.added = 1;
+    msg.surface_a = e.contact.a;
+    msg.surface_b = e.contact.b;
+    for (int i = 0; i < 4; ++i) msg.u[i] = e.contact.u[i];
+    Apply(msg);
+  }
+
+  // The grasp: a position goal at the grasp point (its weight is the coupling stiffness, in
+  // the units where least astonishment has the problem's default weight), and for 6-DOF an
+  // orientation goal with the rotational stiffness relative to the translational one.
+  grasp_at_ = optimizer::Attachment{scene->grasp.body, scene->grasp.point};
+  const contact::BodyPose& gp = poses_[static_cast<size_t>(scene->grasp.body)];
+  last_target_ = gp.Point(scene->grasp.point);
+  grasp_ = optimizer::MakePositionGoal(grasp_at_, last_target_);
+  p.AddObjective(grasp_, 1.0);
+  if (options.dof == 6) {
+    grasp_orientation_ =
+        optimizer::MakeOrientationGoal(scene->grasp.body, gp.R, Eigen::Vector3d::Ones());
+    // E = ½ k_r Σ|R e_i − R_t e_i|² ≈ k_r θ²: weight k_rot / 2 relative to the grasp's k.
+    p.AddObjective(grasp_orientation_,
+                   0.5 * scene->grasp.rotational_stiffness / scene->device.stiffness);
+  } else if (scene->grasp.hold_orientation > 0.0) {
+    p.AddObjective(optimizer::OrientationGoal(scene->grasp.body, gp.R, Eigen::Vector3d::Ones()),
+                   scene->grasp.hold_orientation);
+  }
+  for (const ObjectiveSpec& o : scene->objectives) p.AddObjective(o.term, o.weight);
+  optimizer::SolverOptions so;
+  so.max_iterations = options.max_iterations;
+  solver_ = std::make_unique<optimizer::Solver>(p, so);
+  // Settle the initial configuration exactly (contacts at machine precision before the hand).
+  optimizer::SolverOptions settle = so;
+  settle.max_iterations = 60;
+  optimizer::Solver(p, settle).Solve(&q_);
+  solver_->Solve(&q_);
+  scene->mechanism.Poses(q_, &poses_);
+  if (!scene->device.origin_given) scene->device.origin = GraspPoint();
+  grasp_->set_target(GraspPoint());
+}
+
+ServoLoop::~ServoLoop() = default;
+
+std::vector<contact::GlobalSurface> ServoLoop::GlobalSurfaces() const {
+  std::vector<contact::GlobalSurface> out;
+  for (const SceneSurface& s : scene_->surfaces) {
+    out.push_back({s.body, &s.surface, s.watched ? &s.mesh : nullptr});
+  }
+  return out;
+}
+
+std::vector<std::pair<int, int>> ServoLoop::GlobalPairs() const {
+  std::vector<std::pair<int, int>> out;
+  for (const ContactPairSpec& p : scene_->pairs) out.emplace_back(p.surface_a, p.surface_b);
+  return out;
+}
+
+bool ServoLoop::Apply(const ContactEventMsg& e) {
+  const int lo = std::min(e.surface_a, e.surface_b), hi = std::max(e.surface_a, e.surface_b);
+  const Eigen::Vector4d u(e.u[0], e.u[1], e.u[2], e.u[3]);
+  Slot* best = nullptr;
+  double best_d = 1e300;
+  for (Slot& s : slots_) {
+    const ContactPairSpec& pair = scene_->pairs[static_cast<size_t>(s.pair)];
+    if (std::min(pair.surface_a, pair.surface_b) != lo ||
+        std::max(pair.surface_a, pair.surface_b) != hi || s.floating) {
+      continue;
+    }
+    if (e.added) {
+      if (s.term->active() && ParameterDistance(scene_->surfaces[static_cast<size_t>(lo)].surface,
+                                                scene_->surfaces[static_cast<size_t>(hi)].surface,
+                                                s.term->extremum().u, u) < 0.03) {
+        return true;  // already tracked (the event raced the snapshot)
+      }
+      continue;
+    }
+    if (!s.term->active()) continue;
+    const double d = ParameterDistance(scene_->surfaces[static_cast<size_t>(lo)].surface,
+                                       scene_->surfaces[static_cast<size_t>(hi)].surface,
+                                       s.term->extremum().u, u);
+    if (d < best_d) {
+      best_d = d;
+      best = &s;
+    }
+  }
+  if (e.added) {
+    for (Slot& s : slots_) {
+      const ContactPairSpec& pair = scene_->pairs[static_cast<size_t>(s.pair)];
+      if (!s.floating && !s.term->active() && std::min(pair.surface_a, pair.surface_b) == lo &&
+          std::max(pair.surface_a, pair.surface_b) == hi) {
+        s.term->Activate(u);
+        return true;
+      }
+    }
+    return false;
+  }
+  if (best) best->term->Deactivate();
+  return best != nullptr;
+}
+
+Eigen::Vector3d ServoLoop::ToolPoint(const DeviceSample& d) const {
+  const DeviceSpec& dv = scene_->device;
+  const Eigen::Quaterniond Q(d.orientation[0], d.orientation[1], d.orientation[2],
+                             d.orientation[3]);
+  const Eigen::Vector3d p(d.position[0], d.position[1], d.position[2]);
+  return dv.origin + dv.scale * dv.rotation * (p + Q * dv.tool_offset);
+}
+
+Eigen::Vector3d ServoLoop::GraspPoint() const {
+  return poses_[static_cast<size_t>(grasp_at_.body)].Point(grasp_at_.point);
+}
+
+int ServoLoop::active_contacts() const {
+  int n = 0;
+  for (const Slot& s : slots_) n += s.term->active();
+  return n;
+}
+
+void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out) {
+  const DeviceSpec& dv = scene_->device;
+  const double dt = last_tick_ns_ > 0 ? 1e-9 * static_cast<double>(now_ns - last_tick_ns_) : 0.0;
+  last_tick_ns_ = now_ns;
+  ++ticks_;
+  out->answered = false;
+  const bool fresh =
+      device && 1e-9 * static_cast<double>(now_ns - device->received_ns) <= options_.device_timeout;
+  out->timed_out = device && !fresh;
+  if (fresh) {
+    grasp_->set_target(ToolPoint(*device));
+    if (grasp_orientation_) {
+      const Eigen::Quaterniond Q(device->orientation[0], device->orientation[1],
+                                 device->orientation[2], device->orientation[3]);
+      grasp_orientation_->set_target(dv.rotation * Q.toRotationMatrix());
+    }
+  }
+  // Solve (also when the hand holds still or is gone: the contacts settle to machine precision
+  // and the scene holds at the last target).
+  const optimizer::SolveStats st = solver_->Solve(&q_);
+  scene_->mechanism.Poses(q_, &poses_);
+  out->iterations = st.iterations;
+  out->violation = st.max_violation;
+  out->num_contacts = active_contacts();
+
+  // The ramp: up over ramp_time while the device is fresh, down while it is not (then the force
+  // scales down with it and the scene holds at the last target).
+  const double ramp_rate = dv.ramp_time > 0.0 ? dt / dv.ramp_time : 1.0;
+  const double previous = ramp_;
+  ramp_ = std::clamp(ramp_ + (fresh ? ramp_rate : -ramp_rate), 0.0, 1.0);
+  if (!fresh) {
+    const double scale = previous > 0.0 ? ramp_ / previous : 0.0;
+    force_ *= scale;
+    torque_ *= scale;
+    have_error_ = false;
+    return;
+  }
+  if (device->seq == last_seq_) return;  // this sample is answered already
+  // Virtual coupling at the hand (device frame): the grasp point's offset from the tool point,
+  // mapped back through the workspace scale, with damping on its rate of change.
+  const Eigen::Vector3d error =
+      dv.rotation.transpose() * (GraspPoint() - grasp_->target()) / dv.scale;
+  const double dt_device =
+      last_seq_ >= 0 ? 1e-6 * static_cast<double>(device->utime - last_device_utime_) : 0.0;
+  Eigen::Vector3d rate = Eigen::Vector3d::Zero();
+  if (have_error_ && dt_device > 0.0) rate = (error - error_prev_) / dt_device;
+  Eigen::Vector3d force = dv.stiffness * error + dv.damping * rate;
+  if (force.norm() > dv.max_force) force *= dv.max_force / force.norm();
+  force *= ramp_;
+  // Force-rate limit between answers.
+  const double max_step = dv.max_force_rate * std::max(dt_device, 1e-4);
+  const Eigen::Vector3d step = force - force_;
+  force_ += step.norm() > max_step ? step * (max_step / step.norm()) : step;
+  if (force_.norm() > dv.max_force) force_ *= dv.max_force / force_.norm();
+  if (grasp_orientation_) {
+    // τ on the hand = R ¼ G(Q) ∂E/∂Q (the reaction of the body-frame torque −¼ G(Q) ∂E/∂Q that
+    // the orientation coupling exerts on the grasped body; seed 001 Eq. 5), device frame.
+    grasp_orientation_->Evaluate(poses_, r9_, J9_, J9b_);
+    const contact::BodyPose& gp = poses_[static_cast<size_t>(grasp_at_.body)];
+    const Eigen::Vector4d dE_dQ =
+        0.5 * scene_->grasp.rotational_stiffness * J9_.rightCols<4>().transpose() * r9_;
+    Eigen::Vector3d torque =
+        dv.rotation.transpose() * gp.R * contact::TorqueFromQuaternionForce(gp.q.tail<4>(), dE_dQ);
+    torque *= ramp_;
+    torque_ = torque;
+  }
+  error_prev_ = error;
+  have_error_ = true;
+  last_seq_ = device->seq;
+  last_device_utime_ = device->utime;
+  out->answered = true;
+  WrenchSample& w = out->wrench;
+  w.utime = device->utime;
+  w.seq = device->seq;
+  w.server_utime = now_ns / 1000;
+  for (int i = 0; i < 3; ++i) {
+    w.force[i] = force_[i];
+    w.torque[i] = options_.dof == 6 ? torque_[i] : 0.0;
+  }
+  w.state = ramp_ < 1.0 ? 1 : 0;
+}
+
+void ServoLoop::FillSnapshot(Snapshot* s) const {
+  s->tick = ticks_;
+  s->num_bodies = static_cast<int32_t>(poses_.size());
+  for (size_t b = 0; b < poses_.size(); ++b) {
+    for (int i = 0; i < 7; ++i) s->q[b][i] = poses_[b].q[i];
+  }
+  int n = 0;
+  const Eigen::VectorXd& lambda = solver_->inequality_multipliers();
+  const Eigen::VectorXd& lambda_e = solver_->equality_multipliers();
+  for (const Slot& slot : slots_) {
+    if (!slot.term->active() || n >= kMaxContacts) continue;
+    const ContactPairSpec& pair = scene_->pairs[static_cast<size_t>(slot.pair)];
+    TrackedContact& c = s->contacts[n++];
+    c.surface_a = std::min(pair.surface_a, pair.surface_b);
+    c.surface_b = std::max(pair.surface_a, pair.surface_b);
+    c.body_a = scene_->surfaces[static_cast<size_t>(c.surface_a)].body;
+    c.body_b = scene_->surfaces[static_cast<size_t>(c.surface_b)].body;
+    const contact::SurfaceSurfaceExtremum& e = slot.term->extremum();
+    for (int i = 0; i < 4; ++i) c.u[i] = e.u[i];
+    c.beta = e.beta;
+    for (int i = 0; i < 3; ++i) {
+      c.p_a[i] = e.p_f[i];
+      c.p_b[i] = e.p_g[i];
+    }
+    (void)lambda_e;
+    c.force = slot.row >= 0 && slot.row < lambda.size()
+                  ? scene_->device.stiffness * lambda[slot.row]
+                  : 0.0;
+  }
+  s->num_contacts = n;
+  const Eigen::Vector3d t = grasp_->target();
+  for (int i = 0; i < 3; ++i) s->grasp_target[i] = t[i];
+}
+
+void ServoLoop::ToGlobalInput(const Snapshot& s, std::vector<contact::BodyPose>* poses,
+                              std::vector<contact::GlobalContact>* tracked) {
+  poses->resize(static_cast<size_t>(s.num_bodies));
+  for (int b = 0; b < s.num_bodies; ++b) {
+    contact::Vector7d coordinates;
+    for (int i = 0; i < 7; ++i) coordinates[i] = s.q[b][i];
+    (*poses)[static_cast<size_t>(b)] = contact::BodyPose::FromCoordinates(coordinates);
+  }
+  tracked->clear();
+  for (int k = 0; k < s.num_contacts; ++k) {
+    const TrackedContact& c = s.contacts[k];
+    contact::GlobalContact g;
+    g.a = c.surface_a;
+    g.b = c.surface_b;
+    g.u = Eigen::Vector4d(c.u[0], c.u[1], c.u[2], c.u[3]);
+    g.beta = c.beta;
+    g.p_a = Eigen::Vector3d(c.p_a[0], c.p_a[1], c.p_a[2]);
+    g.p_b = Eigen::Vector3d(c.p_b[0], c.p_b[1], c.p_b[2]);
+    tracked->push_back(g);
+  }
+}
+
+}  // namespace tangent::server

@@ -1,0 +1,151 @@
+#pragma once
+
+// The servo loop's work for one tick (design.md §2), free of threads and I/O: map the device
+// pose into the scene, apply contact events, solve warm, compute the wrench of the virtual
+// coupling. Daemon (daemon.h) runs it on its own core; tests and benchmarks call it directly.
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "contact/global.h"
+#include "optimizer/contacts.h"
+#include "optimizer/goals.h"
+#include "optimizer/problem.h"
+#include "optimizer/solver.h"
+#include "server/scene.h"
+
+namespace tangent::server {
+
+inline constexpr int kMaxBodies = 32;
+inline constexpr int kMaxContacts = 32;
+
+/// A device state the LCM bridge accepted (plain data: it crosses threads in a Seqlock).
+struct DeviceSample {
+  int64_t utime = 0;                     ///< client clock, µs (echoed)
+  int64_t seq = 0;                       ///< echoed
+  double position[3] = {0, 0, 0};        ///< device frame, m
+  double orientation[4] = {1, 0, 0, 0};  ///< device frame, (w, x, y, z)
+  double velocity[3] = {0, 0, 0};        ///< device frame, m/s
+  int32_t buttons = 0;
+  int64_t received_ns = 0;  ///< server CLOCK_MONOTONIC at receipt
+};
+
+/// A contact the servo tracks (plain data, for the snapshot).
+struct TrackedContact {
+  int32_t surface_a = 0, surface_b = 0, body_a = 0, body_b = 0;
+  double u[4] = {0, 0, 0, 0};
+  double beta = 0.0;
+  double p_a[3] = {0, 0, 0}, p_b[3] = {0, 0, 0};
+  double force = 0.0;  ///< multiplier, N
+};
+
+/// Servo → global stage and LCM bridge: the configuration and the tracked contacts.
+struct Snapshot {
+  int64_t tick = 0;
+  int32_t num_bodies = 0;
+  double q[kMaxBodies][7] = {};
+  int32_t num_contacts = 0;
+  TrackedContact contacts[kMaxContacts] = {};
+  double grasp_target[3] = {0, 0, 0};
+  int64_t events_applied = 0;  ///< contact events the servo has taken (applied or dropped)
+};
+
+/// Global stage → servo: one contact event (plain data, for the SPSC ring).
+struct ContactEventMsg {
+  int32_t added = 1;  ///< 1 added, 0 removed
+  int32_t surface_a = 0, surface_b = 0;
+  double u[4] = {0, 0, 0, 0};
+};
+
+/// The wrench of one tick, device frame (plain data, for the SPSC ring to the bridge).
+struct WrenchSample {
+  int64_t utime = 0, seq = 0;  ///< echo of the device sample answered
+  int64_t server_utime = 0;
+  double force[3] = {0, 0, 0};   ///< N
+  double torque[3] = {0, 0, 0};  ///< N m
+  int8_t state = 0;              ///< 0 running, 1 ramping up, 2 timeout
+};
+
+struct ServoOptions {
+  int dof = 3;                  ///< 3: force only; 6: force and torque
+  int max_iterations = 10;      ///< solver iterations per tick
+  double device_timeout = 0.1;  ///< s without device states: force ramps to zero, scene holds
+};
+
+struct TickResult {
+  WrenchSample wrench;
+  bool answered = false;  ///< a new device sample was consumed (wrench answers it)
+  int iterations = 0;
+  double violation = 0.0;
+  int num_contacts = 0;
+  bool timed_out = false;
+};
+
+class ServoLoop {
+ public:
+  /// Builds the problem: joints, floating contacts (found at the initial poses: @throws
+  /// SceneError when one is not touching), contact slots for unilateral pairs, the grasp
+  /// (position goal; orientation goal for 6-DOF), objectives. Runs one global pass at the initial
+  /// poses to activate the contacts present there.
+  ServoLoop(Scene* scene, const ServoOptions& options);
+  ~ServoLoop();
+
+  /// One tick (allocation free). `device`: the latest accepted sample (nullptr: none yet);
+  /// `now_ns`: CLOCK_MONOTONIC.
+  void Tick(const DeviceSample* device, int64_t now_ns, TickResult* out);
+  /// Applies a global-stage event: activates a free slot of the pair / frees the slot nearest
+  /// to the event's parameters. @return false when no slot was free (counted by the caller).
+  bool Apply(const ContactEventMsg& e);
+  void FillSnapshot(Snapshot* s) const;
+
+  /// The global stage's view of the scene (surfaces in scene order; declared pairs).
+  std::vector<contact::GlobalSurface> GlobalSurfaces() const;
+  std::vector<std::pair<int, int>> GlobalPairs() const;
+  /// Converts a global-stage snapshot input: tracked contacts and poses.
+  static void ToGlobalInput(const Snapshot& s, std::vector<contact::BodyPose>* poses,
+                            std::vector<contact::GlobalContact>* tracked);
+
+  const Eigen::VectorXd& q() const { return q_; }
+  const Scene& scene() const { return *scene_; }
+  /// Maps a device sample to the world tool point (scene frame).
+  Eigen::Vector3d ToolPoint(const DeviceSample& d) const;
+  Eigen::Vector3d GraspPoint() const;
+  int active_contacts() const;
+  const optimizer::Problem& problem() const { return *problem_; }
+
+ private:
+  struct Slot {
+    int pair = 0;
+    int row = 0;  ///< inequality row (multiplier index)
+    bool floating = false;
+    std::shared_ptr<optimizer::SurfaceContactTerm> term;
+  };
+
+  Scene* scene_;
+  ServoOptions options_;
+  std::unique_ptr<optimizer::Problem> problem_;
+  std::unique_ptr<optimizer::Solver> solver_;
+  std::shared_ptr<optimizer::PositionGoalTerm> grasp_;
+  std::shared_ptr<optimizer::OrientationGoalTerm> grasp_orientation_;
+  optimizer::Attachment grasp_at_;
+  std::vector<Slot> slots_;
+  Eigen::VectorXd q_;
+  std::vector<contact::BodyPose> poses_;
+  // Coupling state.
+  int64_t last_seq_ = -1;
+  int64_t last_device_utime_ = 0;
+  Eigen::Vector3d error_prev_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d force_ = Eigen::Vector3d::Zero(), torque_ = Eigen::Vector3d::Zero();
+  double ramp_ = 0.0;  ///< 0..1
+  int64_t last_tick_ns_ = 0;
+  int64_t ticks_ = 0;
+  bool have_error_ = false;
+  Eigen::Vector3d last_target_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix<double, 9, 1> r9_;
+  Eigen::Matrix<double, 9, 7> J9_, J9b_;
+};
+
+}  // namespace tangent::server

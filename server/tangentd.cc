@@ -1,0 +1,95 @@
+// tangentd: the haptic server. Loads a scene, runs the servo loop (one core), the global contact
+// stage (the other core) and the LCM bridge, until SIGINT/SIGTERM or --duration. Prints the load
+// log, then (with --status) a one-line status per second, and a key=value summary at exit.
+
+#include <csignal>
+#include <cstdio>
+#include <exception>
+
+#include <CLI/CLI.hpp>
+
+#include "server/bridge.h"
+#include "server/engine.h"
+#include "server/scene.h"
+
+namespace {
+std::atomic<bool> g_stop{false};
+void OnSignal(int) { g_stop.store(true); }
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace tangent::server;
+  CLI::App app{"tangentd: haptic-rate manipulation of NURBS parts over LCM"};
+  std::string scene_path, log_path, url = kDefaultLcmUrl;
+  EngineOptions eo;
+  Channels ch;
+  double duration = 0.0;
+  bool status = false;
+  app.add_option("--scene", scene_path, "scene file (JSON)")->required()->check(CLI::ExistingFile);
+  app.add_option("--rate", eo.rate_hz, "servo loop rate, Hz")->check(CLI::Range(100.0, 50000.0));
+  app.add_option("--spin-us", eo.spin_us, "spin this long before each deadline, us")
+      ->check(CLI::Range(0.0, 10000.0));
+  app.add_option("--servo-cpu", eo.servo_cpu, "core for the servo loop (-1: any)");
+  app.add_option("--global-cpu", eo.global_cpu, "core for the global contact stage (-1: any)");
+  app.add_option("--dof", eo.servo.dof, "device mode: 3 (force) or 6 (force and torque)")
+      ->check(CLI::IsMember({3, 6}));
+  app.add_option("--timeout", eo.servo.device_timeout,
+                 "device silence before the force ramps "
+                 "to zero, s")
+      ->check(CLI::Range(0.001, 10.0));
+  app.add_option("--iterations", eo.servo.max_iterations, "solver iterations per tick")
+      ->check(CLI::Range(1, 100));
+  app.add_option("--lcm-url", url, "LCM URL (default: multicast with ttl=0 on a private group)");
+  app.add_option("--device-channel", ch.device, "channel of device_state_t");
+  app.add_option("--wrench-channel", ch.wrench, "channel of wrench_t");
+  app.add_option("--contacts-channel", ch.contacts, "channel of contact_states_t");
+  app.add_option("--stats-channel", ch.stats, "channel of loop_stats_t");
+  app.add_option("--scene-channel", ch.scene, "channel of scene_state_t");
+  app.add_option("--log", log_path, "log file (load log and one status line per second)");
+  app.add_option("--duration", duration, "stop after this many seconds (0: run until a signal)");
+  app.add_flag("--status", status, "print a live status line");
+  CLI11_PARSE(app, argc, argv);
+
+  std::FILE* log = nullptr;
+  if (!log_path.empty()) {
+    log = std::fopen(log_path.c_str(), "w");
+    if (!log) {
+      std::fprintf(stderr, "tangentd: cannot write the log file %s\n", log_path.c_str());
+      return 2;
+    }
+  }
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  try {
+    std::unique_ptr<Scene> scene = LoadScene(scene_path);
+    for (const std::string& line : scene->load_log) {
+      std::printf("load: %s\n", line.c_str());
+      if (log) std::fprintf(log, "load: %s\n", line.c_str());
+    }
+    Engine engine(scene.get(), eo);
+    Bridge bridge(&engine, url, ch, log, status);
+    std::printf(
+        "tangentd: scene \"%s\": %d bodies, %zu surfaces, %zu contact pairs, %d contacts "
+        "at rest; %.0f Hz, %d-DOF device, LCM %s\n",
+        scene->name.c_str(), scene->mechanism.num_bodies(), scene->surfaces.size(),
+        scene->pairs.size(), engine.servo().active_contacts(), eo.rate_hz, eo.servo.dof,
+        url.c_str());
+    std::fflush(stdout);
+    engine.Start();
+    bridge.Run(g_stop, duration);
+    engine.Stop();
+    std::printf("tangentd summary:\n%s", bridge.Report().c_str());
+    if (log) std::fprintf(log, "summary:\n%s", bridge.Report().c_str());
+  } catch (const SceneError& e) {
+    std::fprintf(stderr, "tangentd: scene error: %s\n", e.what());
+    return 2;
+  } catch (const LcmError& e) {
+    std::fprintf(stderr, "tangentd: %s\n", e.what());
+    return 3;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tangentd: %s\n", e.what());
+    return 1;
+  }
+  if (log) std::fclose(log);
+  return 0;
+}
