@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# Integration over real LCM between the two processes, tangentd and tangent-phantom, inside a
+# private network namespace (user namespace, loopback up, multicast routed to it): nothing
+# touches the host's network and tests can run side by side.
+#   integration.sh CASE TANGENTD PHANTOM SCENES_DIR      CASE: demo | timeout | rejected
+set -euo pipefail
+case_name=$1 tangentd=$2 phantom=$3 scenes=$4
+
+if [ -z "${TANGENT_IN_NETNS:-}" ]; then
+  export TANGENT_IN_NETNS=1
+  exec unshare -rn bash "$0" "$@"
+fi
+ip link set lo up
+ip route add 224.0.0.0/4 dev lo
+
+work=$(mktemp -d)
+cleanup() {
+  if [ -n "${server:-}" ]; then kill -INT "$server" 2>/dev/null || true; fi
+  rm -rf "$work"
+}
+trap cleanup EXIT
+"$tangentd" --scene "$scenes/paperclips.json" --log "$work/tangentd.log" > "$work/server.out" 2>&1 &
+server=$!
+for _ in $(seq 600); do  # the scene loads (offset meshes certified) before the loop starts
+  grep -q "^tangentd: scene" "$work/server.out" && break
+  kill -0 "$server" 2>/dev/null || { cat "$work/server.out"; echo "tangentd died"; exit 1; }
+  sleep 0.1
+done
+
+phantom_args=(--duration 5)
+case $case_name in
+  demo) phantom_args+=(--trajectory drag) ;;
+  timeout) phantom_args+=(--trajectory drag --silence-at 2 --silence-for 1) ;;
+  rejected) phantom_args+=(--trajectory pull --inject-bad 10) ;;
+  *) echo "unknown case $case_name"; exit 2 ;;
+esac
+"$phantom" "${phantom_args[@]}" > "$work/phantom.out" 2>&1 ||
+  { cat "$work/phantom.out"; echo "FAIL: tangent-phantom exited with $?"; exit 1; }
+kill -INT "$server"
+wait "$server"
+status=$?
+server=
+cat "$work/phantom.out"
+grep -v "^load:" "$work/server.out"
+
+value() { grep -m1 "^$2=" "$work/$1.out" | cut -d= -f2; }
+fail() { echo "FAIL: $*"; exit 1; }
+[ "$status" -eq 0 ] || fail "tangentd exited with $status on SIGINT"
+grep -q "^tangentd summary:" "$work/server.out" || fail "no tangentd summary"
+sent=$(value phantom sent)
+answered=$(value phantom answered)
+force_max=$(value phantom force_max_n)
+awk -v f="$force_max" 'BEGIN { exit !(f <= 3.3 + 1e-9) }' || fail "force $force_max above 3.3 N"
+[ "$(value phantom bad_wrenches)" -eq 0 ] || fail "non-finite wrench received"
+case $case_name in
+  demo)
+    [ "$(value phantom verdict)" = STABLE ] || fail "interaction not stable"
+    awk -v a="$answered" -v s="$sent" 'BEGIN { exit !(a >= 0.95 * s) }' ||
+      fail "only $answered of $sent device states answered"
+    [ "$(value server contacts)" -ge 1 ] || fail "no contact tracked"
+    [ "$(value server device_messages)" -ge 4000 ] || fail "too few device states accepted"
+    ;;
+  timeout)
+    [ "$(value server device_timeouts)" -ge 1 ] || fail "the 1 s silence was not seen as a timeout"
+    ;;
+  rejected)
+    for reason in non_finite quaternion sequence jump; do
+      [ "$(value server rejected_$reason)" -ge 1 ] || fail "no message rejected as $reason"
+    done
+    [ "$(value server device_messages)" -ge 3000 ] || fail "good messages were lost"
+    ;;
+esac
+echo "PASS: $case_name"

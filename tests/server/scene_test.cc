@@ -1,0 +1,114 @@
+// Scene files: every example scene loads (and certifies its offset meshes); bad scenes are
+// rejected with a message naming the file, the item and what is wrong.
+
+#include "server/scene.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace tangent::server {
+namespace {
+
+TEST(SceneTest, ExampleScenesLoad) {
+  for (const char* name : {"paperclips", "fourbar_point", "fourbar_floating", "finger_surface"}) {
+    SCOPED_TRACE(name);
+    const auto s = LoadScene(std::string(TANGENT_SCENES_DIR) + "/" + name + ".json");
+    EXPECT_GE(s->mechanism.num_moving(), 1);
+    EXPECT_GE(s->grasp.body, 0);
+    for (const SceneSurface& sf : s->surfaces) {
+      EXPECT_EQ(sf.watched, !sf.mesh.vertices.empty()) << sf.name;  // meshes only where needed
+    }
+  }
+  const auto clips = LoadScene(std::string(TANGENT_SCENES_DIR) + "/paperclips.json");
+  EXPECT_EQ(clips->mechanism.num_bodies(), 3);
+  EXPECT_EQ(clips->pairs.size(), 3u);
+  EXPECT_NEAR(clips->mechanism.body(1).pose[1], 31.35e-3, 1e-15);  // mm converted
+  ASSERT_EQ(clips->load_log.size(), 3u);
+  EXPECT_NE(clips->load_log[0].find("0 self-intersecting"), std::string::npos);
+}
+
+std::string Error(const std::string& text) {
+  try {
+    ParseScene(text, "bad.json");
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+std::string LoadSceneError(const std::string& path) {
+  try {
+    LoadScene(path);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+const char* kBody = R"({"name": "b", "mass": 1})";
+
+std::string Scene(const std::string& bodies, const std::string& rest) {
+  return R"({"bodies": [)" + bodies + R"(], "surfaces": [], )" + rest + "}";
+}
+
+TEST(SceneTest, BadScenesNameTheProblem) {
+  const std::string grasp = R"("grasp": {"body": "b"})";
+  EXPECT_NE(Error("{ not json").find("bad.json: not valid JSON"), std::string::npos);
+  EXPECT_NE(Error("[1, 2]").find("must be a JSON object"), std::string::npos);
+  EXPECT_NE(Error(R"({"surfaces": []})").find("missing \"bodies\""), std::string::npos);
+  EXPECT_NE(Error(Scene(R"({"name": "b", "mass": -2})", grasp))
+                .find("bodies[0].mass: must be positive, got -2"),
+            std::string::npos);
+  EXPECT_NE(Error(Scene(std::string(kBody) + "," + kBody, grasp))
+                .find("bodies[1].name: duplicate body name \"b\""),
+            std::string::npos);
+  EXPECT_NE(Error(Scene(R"({"name": "b", "quaternion": [1, 1, 0, 0]})", grasp))
+                .find("bodies[0].quaternion: must be a unit quaternion"),
+            std::string::npos);
+  EXPECT_NE(Error(Scene(R"({"name": "b", "position": [0, 0]})", grasp))
+                .find("bodies[0].position: must be an array of 3 numbers"),
+            std::string::npos);
+  EXPECT_NE(Error(Scene(R"({"name": "b", "fixed": true})", grasp)).find("no moving body"),
+            std::string::npos);
+  EXPECT_NE(Error(Scene(kBody, R"("grasp": {"body": "nobody"})"))
+                .find("grasp.body: no body named \"nobody\""),
+            std::string::npos);
+  EXPECT_NE(Error(Scene(kBody, R"("length_unit": "inch", )" + grasp))
+                .find("length_unit: must be \"m\", \"cm\" or \"mm\""),
+            std::string::npos);
+  EXPECT_NE(
+      Error(R"({"bodies": [{"name": "b"}], "surfaces": [{"name": "s", "body": "b", "type": "blob"}],
+               "grasp": {"body": "b"}})")
+          .find("surfaces[0].type: unknown surface type \"blob\""),
+      std::string::npos);
+  EXPECT_NE(
+      Error(R"({"bodies": [{"name": "b"}], "surfaces": [{"name": "s", "body": "b", "type": "sphere",
+               "radius": 0}], "grasp": {"body": "b"}})")
+          .find("surfaces[0].radius: must be positive"),
+      std::string::npos);
+  EXPECT_NE(
+      Error(Scene(std::string(kBody) + R"(, {"name": "c"})",
+                  R"("joints": [{"type": "hinge", "a": {"body": "b"}, "b": {"body": "c"}}], )" +
+                      grasp))
+          .find("joints[0].type: unknown joint type \"hinge\""),
+      std::string::npos);
+  EXPECT_NE(Error(R"({"bodies": [{"name": "b"}, {"name": "c"}],
+      "surfaces": [{"name": "s", "body": "b", "type": "sphere", "radius": 1},
+                   {"name": "t", "body": "b", "type": "sphere", "radius": 1, "position": [3, 0, 0]}],
+      "contacts": [{"a": "s", "b": "t"}], "grasp": {"body": "b"}})")
+                .find("contacts[0]: both surfaces are on body \"b\""),
+            std::string::npos);
+  // Passivity: k must stay below 2b/T and the device's rated stiffness.
+  EXPECT_NE(Error(Scene(kBody, grasp + R"(, "device": {"stiffness": 450, "damping": 0.2})"))
+                .find("device.stiffness: exceeds the passivity limit 2 damping / period = 400 N/m"),
+            std::string::npos);
+  EXPECT_NE(Error(Scene(kBody, grasp + R"(, "device": {"stiffness": 800, "damping": 1})"))
+                .find("device.stiffness: exceeds the device's rated stiffness 500 N/m"),
+            std::string::npos);
+  EXPECT_NE(LoadSceneError("/nonexistent/scene.json").find("cannot open the scene file"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace tangent::server

@@ -1,0 +1,209 @@
+// The servo loop on the example scenes, without threads: exact contacts at rest, bounded
+// violation while dragged, contact events applied through slots, the coupling's force limits,
+// the device timeout, 6-DOF torque, and no allocation in a tick.
+
+#include "server/servo.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "tests/support/alloc_counter.h"
+
+namespace tangent::server {
+namespace {
+
+constexpr double mm = 1e-3;
+
+std::unique_ptr<Scene> Load(const char* name) {
+  return LoadScene(std::string(TANGENT_SCENES_DIR) + "/" + name + ".json");
+}
+
+DeviceSample Sample(int64_t seq, const Eigen::Vector3d& p, int64_t now_ns) {
+  DeviceSample s;
+  s.seq = seq;
+  s.utime = now_ns / 1000;
+  s.received_ns = now_ns;
+  for (int i = 0; i < 3; ++i) s.position[i] = p[i];
+  return s;
+}
+
+TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
+  auto scene = Load("paperclips");
+  ServoLoop servo(scene.get(), ServoOptions{});
+  EXPECT_EQ(servo.active_contacts(), 2);  // both hooks, found by the global stage at load
+  contact::GlobalContactStage stage(servo.GlobalSurfaces(), servo.GlobalPairs(),
+                                    contact::GlobalOptions{});
+  std::vector<contact::BodyPose> poses;
+  std::vector<contact::GlobalContact> tracked;
+  std::vector<contact::ContactEvent> events;
+  Snapshot snap;
+  TickResult r;
+  int64_t now = 1'000'000'000;
+  // At rest: the hand at the grasp point.
+  double rest = 0.0;
+  for (int k = 1; k <= 200; ++k) {
+    const DeviceSample s = Sample(k, Eigen::Vector3d::Zero(), now);
+    servo.Tick(&s, now, &r);
+    now += 250'000;
+    if (k > 20) rest = std::max(rest, r.violation);
+  }
+  EXPECT_LE(rest, 1e-10);
+  // Drag: lift 6 mm and circle (the phantom's "drag" path, without device dynamics), 1 kHz device
+  // states, 4 servo ticks each, a global pass every 4 ticks.
+  double worst = 0.0, max_force = 0.0, force_lifted = 0.0;
+  int events_applied = 0;
+  long allocations = 0;
+  int64_t seq = 1000;
+  for (int k = 0; k < 6000; ++k) {
+    const double t = 1e-3 * k;
+    const double lift = 6 * mm * std::min(1.0, t / 2.0);
+    const double a = 2 * std::numbers::pi * std::max(0.0, t - 2.0) / 5.0;
+    const Eigen::Vector3d hand(4 * mm * std::sin(a), lift + 4 * mm * (std::cos(a) - 1.0), 0);
+    const DeviceSample s = Sample(++seq, hand, now);
+    for (int tick = 0; tick < 4; ++tick) {
+      const long before = tangent::testing::AllocationCount();
+      servo.Tick(&s, now, &r);
+      allocations += tangent::testing::AllocationCount() - before;
+      now += 250'000;
+      worst = std::max(worst, r.violation);
+      if (r.answered) {
+        const double f =
+            Eigen::Vector3d(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]).norm();
+        max_force = std::max(max_force, f);
+        if (std::abs(t - 2.0) < 1e-9) force_lifted = f;
+      }
+    }
+    servo.FillSnapshot(&snap);
+    ServoLoop::ToGlobalInput(snap, &poses, &tracked);
+    stage.Run(poses, tracked, &events);
+    for (const contact::ContactEvent& e : events) {
+      ContactEventMsg m;
+      m.added = e.kind == contact::ContactEvent::Kind::kAdded;
+      m.surface_a = e.contact.a;
+      m.surface_b = e.contact.b;
+      for (int i = 0; i < 4; ++i) m.u[i] = e.contact.u[i];
+      const long before = tangent::testing::AllocationCount();
+      events_applied += servo.Apply(m);
+      allocations += tangent::testing::AllocationCount() - before;
+    }
+  }
+  std::printf(
+      "paperclip servo: rest violation %.1e, drag worst violation %.1e, force when lifted %.2f N, "
+      "max %.2f N, contacts now %d, events applied %d, allocations %ld\n",
+      rest, worst, force_lifted, max_force, servo.active_contacts(), events_applied, allocations);
+  EXPECT_LE(worst, 1e-6);
+  EXPECT_GT(force_lifted, 0.3);  // the hooks hold the chain back: the hand feels the pull
+  EXPECT_LE(max_force, scene->device.max_force + 1e-12);
+  EXPECT_EQ(allocations, 0);
+  // Every tracked contact is a non-penetration contact at β ≥ −1e-6.
+  servo.FillSnapshot(&snap);
+  for (int k = 0; k < snap.num_contacts; ++k) EXPECT_GE(snap.contacts[k].beta, -1e-6);
+}
+
+TEST(ServoTest, DeviceTimeoutRampsTheForceToZeroAndHoldsTheScene) {
+  auto scene = Load("paperclips");
+  ServoLoop servo(scene.get(), ServoOptions{});
+  TickResult r;
+  int64_t now = 1'000'000'000;
+  DeviceSample s;
+  int64_t seq = 0;
+  for (int k = 0; k < 3000; ++k) {  // ramp up, then pull 5 mm
+    s = Sample(++seq, Eigen::Vector3d(0, 5 * mm * std::min(1.0, k / 1000.0), 0), now);
+    servo.Tick(&s, now, &r);
+    now += 1'000'000;
+  }
+  const double pulled =
+      Eigen::Vector3d(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]).norm();
+  EXPECT_GT(pulled, 0.5);
+  const Eigen::VectorXd held = servo.q();
+  // The device goes silent: the same (stale) sample from now on.
+  for (int k = 0; k < 2000; ++k) {
+    servo.Tick(&s, now, &r);
+    now += 1'000'000;
+    EXPECT_EQ(r.timed_out, k >= 100) << k;  // timeout 0.1 s
+    EXPECT_FALSE(r.answered);               // a stale sample is never answered again
+  }
+  EXPECT_LT((servo.q() - held).norm(), 1e-6);  // the scene holds
+  // A new device state after the silence: answered, ramping up from zero.
+  s = Sample(++seq, Eigen::Vector3d(0, 5 * mm, 0), now);
+  servo.Tick(&s, now, &r);
+  ASSERT_TRUE(r.answered);
+  EXPECT_EQ(r.wrench.state, 1);  // ramping
+  const double after =
+      Eigen::Vector3d(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]).norm();
+  EXPECT_LT(after, 0.05 * pulled);
+}
+
+TEST(ServoTest, SixDofTorqueRestoresTheStylusTowardThePart) {
+  auto scene = Load("fourbar_point");
+  ServoOptions o;
+  o.dof = 6;
+  ServoLoop servo(scene.get(), o);
+  TickResult r;
+  int64_t now = 1'000'000'000;
+  const double theta = 0.1;
+  const Eigen::Quaterniond turn(Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitX()));
+  for (int k = 1; k <= 3000; ++k) {
+    DeviceSample s = Sample(k, Eigen::Vector3d::Zero(), now);
+    const double f = std::min(1.0, k / 1000.0);
+    const Eigen::Quaterniond q = Eigen::Quaterniond::Identity().slerp(f, turn);
+    s.orientation[0] = q.w();
+    s.orientation[1] = q.x();
+    s.orientation[2] = q.y();
+    s.orientation[3] = q.z();
+    servo.Tick(&s, now, &r);
+    now += 1'000'000;
+  }
+  // The coupler cannot turn about x (its joints forbid it): the hand feels a torque back, about
+  // −x, at most the rotational stiffness times the angle.
+  std::printf("6-DOF: torque %.4f %.4f %.4f N m for a %.2f rad twist (k_rot %.3f N m/rad)\n",
+              r.wrench.torque[0], r.wrench.torque[1], r.wrench.torque[2], theta,
+              scene->grasp.rotational_stiffness);
+  EXPECT_LT(r.wrench.torque[0], -0.1 * scene->grasp.rotational_stiffness * theta);
+  EXPECT_LE(std::abs(r.wrench.torque[0]), 1.05 * scene->grasp.rotational_stiffness * theta);
+  // 3-DOF mode sends no torque.
+  auto scene3 = Load("fourbar_point");
+  ServoLoop servo3(scene3.get(), ServoOptions{});
+  DeviceSample s = Sample(1, Eigen::Vector3d::Zero(), now);
+  servo3.Tick(&s, now, &r);
+  EXPECT_EQ(r.wrench.torque[0], 0.0);
+}
+
+TEST(ServoTest, FloatingGraspKeepsTheFingerOnThePad) {
+  auto scene = Load("fourbar_floating");
+  ServoLoop servo(scene.get(), ServoOptions{});
+  TickResult r;
+  int64_t now = 1'000'000'000;
+  double worst = 0.0;
+  for (int k = 1; k <= 2000; ++k) {
+    const double a = 2 * std::numbers::pi * k / 2000.0;
+    const DeviceSample s =
+        Sample(k, 10 * mm * Eigen::Vector3d(0, std::sin(a), 1 - std::cos(a)), now);
+    servo.Tick(&s, now, &r);
+    now += 1'000'000;
+    if (k > 5) worst = std::max(worst, r.violation);
+  }
+  std::printf("floating grasp servo: worst violation %.1e\n", worst);
+  EXPECT_LE(worst, 1e-6);
+}
+
+TEST(ServoTest, BadOptionsAreRejected) {
+  auto scene = Load("fourbar_point");
+  ServoOptions o;
+  o.dof = 4;
+  try {
+    ServoLoop servo(scene.get(), o);
+    FAIL() << "dof 4 accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("dof must be 3 or 6, got 4"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace tangent::server
