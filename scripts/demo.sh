@@ -1,21 +1,46 @@
 #!/usr/bin/env bash
-# The main job. For now: the NURBS kernel demo (primitives, tessellation bounds), the
-# evaluation and contact benchmarks with Open CASCADE measured in the same run, as ratios.
-# Later: the live tangentd + tangent-phantom demo.
+# The main job: the live demo. Installs and builds, then starts tangentd with the three-paperclip
+# scene and tangent-phantom dragging the chain with its built-in "drag" trajectory, shows a live
+# one-line status (progress, loop rate, contacts, force), and ends with both summaries.
+#
+# Both processes run inside a private network namespace (unshare -rn; loopback up and multicast
+# routed to it), so LCM's UDP multicast works on any machine and nothing leaves this host.
+#   DEMO_SECONDS=20 bash scripts/demo.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/install-deps.sh
-bash scripts/build.sh
-./build/bench/tangent_nurbs_demo --obj build/paperclip.obj
-# Medians of 3 repetitions; the JSON (for scripts) goes to build/nurbs_eval_bench.json.
-./build/bench/nurbs_eval_bench --benchmark_min_time=0.05 --benchmark_repetitions=3 \
-  --benchmark_report_aggregates_only=true --benchmark_out=build/nurbs_eval_bench.json \
-  --benchmark_out_format=json
-# Contact kinematics: tracking step, closed-form u_q and Newton against Open CASCADE's local
-# extremum, then convergence rates by seed distance (JSON: build/contact_bench.json).
-./build/bench/contact_bench --benchmark_min_time=0.1 --benchmark_repetitions=3 \
-  --benchmark_report_aggregates_only=true --benchmark_out=build/contact_bench.json \
-  --benchmark_out_format=json
-# The optimizer on the four-bar against IPOPT and NLopt SLSQP (identical problem and starts).
-./build/bench/optimizer_bench --benchmark_min_time=0.1 --benchmark_out=build/optimizer_bench.json \
-  --benchmark_out_format=json
+if [ -z "${TANGENT_DEMO_IN_NETNS:-}" ]; then
+  bash scripts/install-deps.sh
+  bash scripts/build.sh
+  export TANGENT_DEMO_IN_NETNS=1
+  exec unshare -rn bash "$0" "$@"
+fi
+ip link set lo up
+ip route add 224.0.0.0/4 dev lo
+seconds=${DEMO_SECONDS:-20}
+work=$(mktemp -d)
+cleanup() {
+  if [ -n "${server:-}" ]; then kill -INT "$server" 2>/dev/null || true; fi
+  rm -rf "$work"
+}
+trap cleanup EXIT
+
+echo "== tangentd: loading scenes/paperclips.json (offset meshes certified by CGAL)"
+./build/server/tangentd --scene scenes/paperclips.json --log build/tangentd.log > "$work/server.out" 2>&1 &
+server=$!
+until grep -q "^tangentd: scene" "$work/server.out"; do
+  kill -0 "$server" 2>/dev/null || { cat "$work/server.out"; exit 1; }
+  sleep 0.1
+done
+cat "$work/server.out"
+echo "== tangent-phantom: a simulated hand drags clip 2 for ${seconds} s (lift 6 mm, then circles)"
+./build/server/tangent-phantom --duration "$seconds" --trajectory drag --status \
+  --log build/phantom.csv > "$work/phantom.out"
+kill -INT "$server"
+wait "$server"
+server=
+echo
+echo "== tangent-phantom summary (CSV of every step: build/phantom.csv)"
+cat "$work/phantom.out"
+echo
+echo "== tangentd summary (log: build/tangentd.log)"
+sed -n '/^tangentd summary:/,$p' "$work/server.out"

@@ -169,6 +169,7 @@ ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene),
   for (const ObjectiveSpec& o : scene->objectives) p.AddObjective(o.term, o.weight);
   optimizer::SolverOptions so;
   so.max_iterations = options.max_iterations;
+  so.kkt_tolerance = options.kkt_tolerance;
   solver_ = std::make_unique<optimizer::Solver>(p, so);
   // Settle the initial configuration exactly (contacts at machine precision before the hand).
   optimizer::SolverOptions settle = so;
@@ -280,6 +281,7 @@ void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out
   scene_->mechanism.Poses(q_, &poses_);
   out->iterations = st.iterations;
   out->violation = st.max_violation;
+  out->kkt = st.kkt_residual;
   out->num_contacts = active_contacts();
 
   // The ramp: up over ramp_time while the device is fresh, down while it is not (then the force
