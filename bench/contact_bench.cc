@@ -58,7 +58,7 @@ SurfaceSurfaceExtremum Solve(const Vector7d& qf, const Vector7d& qg, const Eigen
 SurfaceSurfaceExtremum Reference(const Vector7d& qf) {
   const Scene& s = GetScene();
   const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(s.q_g);
-  return SolveSurfaceSurface(s.f, pf, s.g, pg, testing::ClosestGridPair(s.f, pf, s.g, pg, 40));
+  return SolveSurfaceSurface(s.f, pf, s.g, pg, ClosestSamplePair(s.f, pf, s.g, pg, 40));
 }
 
 std::vector<Eigen::Vector4d> Seeds(const Eigen::Vector4d& u, double distance, int n,

@@ -68,6 +68,13 @@ struct SurfaceSurfaceExtremum {
   double rcond = 0.0;  ///< of the final Newton matrix
 };
 
+/// A seed (u, v, s, t) for SolveSurfaceSurface: the closest pair among (n+1) x (n+1) samples of
+/// each placed surface (cell centres of an even parameter grid); *distance gets their distance.
+/// For loading and tests (it allocates and costs (n+1)^4 distance evaluations).
+Eigen::Vector4d ClosestSamplePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                                  const nurbs::NurbsSurface& g, const BodyPose& pose_g, int n,
+                                  double* distance = nullptr);
+
 /// Extremal distance between surface f on body F and surface g on body G from a seed (u,v,s,t)
 /// (clamped into the domains). Never returns parameters outside the domains. Allocation free.
 SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,

@@ -39,7 +39,7 @@ struct Bridge::Impl {
   std::unique_ptr<lcm::LCM> lcm;
   DeviceFilter filter;
   BridgeSummary* summary;
-  std::vector<uint64_t> window_prev, window_now, totals;
+  std::vector<uint64_t> window_prev, window_now, window;
   int64_t last_ticks = 0;
   int64_t last_stats_ns = 0;
   int64_t start_ns = 0;
@@ -124,9 +124,8 @@ struct Bridge::Impl {
     LoopCounters c;
     engine->counters().Read(&c);
     engine->compute_histogram().Copy(window_now.data());
-    std::vector<uint64_t> diff(window_now.size());
-    for (size_t b = 0; b < diff.size(); ++b) diff[b] = window_now[b] - window_prev[b];
-    window_prev = window_now;
+    for (size_t b = 0; b < window.size(); ++b) window[b] = window_now[b] - window_prev[b];
+    window_prev.swap(window_now);
     const double seconds = 1e-9 * static_cast<double>(now - last_stats_ns);
     stats.utime = now / 1000;
     stats.loop_rate_hz = seconds > 0 ? static_cast<double>(c.ticks - last_ticks) / seconds : 0.0;
@@ -134,9 +133,9 @@ struct Bridge::Impl {
     last_stats_ns = now;
     stats.ticks = c.ticks;
     stats.overruns = c.overruns;
-    stats.compute_p50_us = DurationHistogram::Quantile(diff.data(), 0.5);
-    stats.compute_p99_us = DurationHistogram::Quantile(diff.data(), 0.99);
-    stats.compute_max_us = DurationHistogram::Quantile(diff.data(), 1.0);
+    stats.compute_p50_us = DurationHistogram::Quantile(window.data(), 0.5);
+    stats.compute_p99_us = DurationHistogram::Quantile(window.data(), 0.99);
+    stats.compute_max_us = DurationHistogram::Quantile(window.data(), 1.0);
     stats.iterations_mean =
         c.ticks > 0 ? static_cast<double>(c.iterations) / static_cast<double>(c.ticks) : 0.0;
     stats.max_violation = c.max_violation;
@@ -187,6 +186,7 @@ Bridge::Bridge(Engine* engine, const std::string& url, const Channels& channels,
   m.lcm->subscribe(channels.ping, &Impl::OnPing, &m)->setQueueCapacity(10000);
   m.window_prev.assign(DurationHistogram::kBins + 1, 0);
   m.window_now.assign(DurationHistogram::kBins + 1, 0);
+  m.window.assign(DurationHistogram::kBins + 1, 0);
 }
 
 Bridge::~Bridge() = default;

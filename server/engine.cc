@@ -62,7 +62,7 @@ uint64_t DurationHistogram::Total(const uint64_t* counts) {
   return t;
 }
 
-Engine::Engine(Scene* scene, const EngineOptions& options) : scene_(scene), options_(options) {
+Engine::Engine(Scene* scene, const EngineOptions& options) : options_(options) {
   servo_ = std::make_unique<ServoLoop>(scene, options.servo);
   Snapshot s;
   servo_->FillSnapshot(&s);
@@ -150,7 +150,7 @@ void Engine::ServoThread() {
     counters.num_contacts = result.num_contacts;
     if ((counters.ticks & 3) == 0 || early) {
       servo_->FillSnapshot(&snap);
-      snap.events_applied = counters.events_applied + counters.events_dropped;
+      snap.events_taken = counters.events_applied + counters.events_dropped;
       snapshot_.Write(snap);
     }
     const int64_t end = MonotonicNs();
@@ -187,7 +187,7 @@ void Engine::GlobalThread() {
     const unsigned v = snapshot_.Read(&snap);
     // Wait until the servo has applied every event pushed (else a contact just added would be
     // found again, untracked).
-    if (v != last_version && snap.events_applied >= events_pushed_.load()) {
+    if (v != last_version && snap.events_taken >= events_pushed_.load()) {
       last_version = v;
       const int64_t t0 = MonotonicNs();
       ServoLoop::ToGlobalInput(snap, &poses, &tracked);

@@ -97,7 +97,6 @@ class Engine {
   void ServoThread();
   void GlobalThread();
 
-  Scene* scene_;
   EngineOptions options_;
   std::unique_ptr<ServoLoop> servo_;
   Seqlock<DeviceSample> device_;

@@ -180,7 +180,6 @@ int main(int argc, char** argv) {
   forces.reserve(static_cast<size_t>(duration * rate) + 16);
   tangent::device_state_t msg{};
   Eigen::Vector3d prev_hand = hand.At(0.0);
-  int bar_last = -1;
   for (int64_t k = 0; !g_stop.load(); ++k) {
     next += period;
     // Sleep then spin to the deadline (timer slack 1 ns).
@@ -242,8 +241,6 @@ int main(int argc, char** argv) {
     }
     if (status && k % 100 == 0) {
       const int bar = static_cast<int>(30.0 * t / duration);
-      (void)bar_last;
-      bar_last = bar;
       std::fprintf(stderr,
                    "\r[%-30s] %4.1f/%.0fs  loop %5.0f Hz  contacts %d  |F| %.2f N  answered %zu  ",
                    std::string(static_cast<size_t>(bar), '#').c_str(), t, duration,

@@ -433,12 +433,13 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
     const Node o = root.At("offset");
     s.offset_tolerance = o.Positive("tolerance", s.offset_tolerance / unit) * unit;
     s.offset_margin = o.Positive("margin", s.offset_margin / unit) * unit;
+    s.offset_max_edge = o.Positive("max_edge", s.offset_max_edge / unit) * unit;
   }
   // Offset meshes for the surfaces the global stage watches, certified (load log).
   for (SceneSurface& sf : s.surfaces) {
     if (!sf.watched) continue;
-    sf.mesh = nurbs::MakeOffsetMesh(sf.surface, s.offset_tolerance, s.offset_margin,
-                                    /*max_edge=*/0.5e-3);
+    sf.mesh =
+        nurbs::MakeOffsetMesh(sf.surface, s.offset_tolerance, s.offset_margin, s.offset_max_edge);
     s.load_log.push_back(nurbs::CertifyOffsetMesh(sf.surface, sf.mesh, 60).Report(sf.name));
   }
   return scene;

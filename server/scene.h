@@ -90,8 +90,11 @@ struct Scene {
   std::vector<ObjectiveSpec> objectives;
   GraspSpec grasp;
   DeviceSpec device;
-  double offset_tolerance = 20e-6;    ///< tessellation bound of offset meshes, m
-  double offset_margin = 0.25e-3;     ///< m
+  double offset_tolerance = 20e-6;  ///< tessellation bound of offset meshes, m
+  double offset_margin = 0.25e-3;   ///< m
+  /// Longest grid-cell chord of the offset meshes, m: small blocks let the global stage skip the
+  /// overlap around tracked contacts (docs/contact.md); keep it well below 4 x 1 mm.
+  double offset_max_edge = 0.5e-3;
   std::vector<std::string> load_log;  ///< certification lines etc.
 
   /// Index of a body or surface by name, -1 if none.

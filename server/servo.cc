@@ -13,8 +13,8 @@ namespace tangent::server {
 
 namespace {
 
-// Parameter distance between two (u, v, s, t), periodic directions wrapped (domain [0, 1]
-// assumed for periodic directions' width through the knot domain).
+// Distance between two (u, v, s, t): the largest of the four differences as a fraction of its
+// domain's width, periodic directions wrapped.
 double ParameterDistance(const nurbs::NurbsSurface& a, const nurbs::NurbsSurface& b,
                          const Eigen::Vector4d& x, const Eigen::Vector4d& y) {
   const nurbs::NurbsSurface* s[4] = {&a, &a, &b, &b};
@@ -28,39 +28,6 @@ double ParameterDistance(const nurbs::NurbsSurface& a, const nurbs::NurbsSurface
     d = std::max(d, e / w);
   }
   return d;
-}
-
-// Closest pair of n x n parameter samples of two placed surfaces (cell centres).
-Eigen::Vector4d ClosestSamples(const nurbs::NurbsSurface& f, const contact::BodyPose& pf,
-                               const nurbs::NurbsSurface& g, const contact::BodyPose& pg, int n,
-                               double* distance) {
-  auto grid = [n](const nurbs::NurbsSurface& s, const contact::BodyPose& p) {
-    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector3d>> pts;
-    const auto& ku = s.knots_u();
-    const auto& kv = s.knots_v();
-    for (int i = 0; i < n; ++i) {
-      for (int j = 0; j < n; ++j) {
-        const double u = ku.domain_begin() + (ku.domain_end() - ku.domain_begin()) * (i + 0.5) / n;
-        const double v = kv.domain_begin() + (kv.domain_end() - kv.domain_begin()) * (j + 0.5) / n;
-        pts.push_back({{u, v}, p.Point(s.Evaluate(u, v, 0).S)});
-      }
-    }
-    return pts;
-  };
-  const auto a = grid(f, pf), b = grid(g, pg);
-  double best = 1e300;
-  Eigen::Vector4d seed = Eigen::Vector4d::Constant(0.5);
-  for (const auto& x : a) {
-    for (const auto& y : b) {
-      const double d = (x.second - y.second).squaredNorm();
-      if (d < best) {
-        best = d;
-        seed << x.first, y.first;
-      }
-    }
-  }
-  *distance = std::sqrt(best);
-  return seed;
 }
 
 }  // namespace
@@ -81,23 +48,19 @@ ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene),
   q_ = scene->mechanism.InitialCoordinates();
   scene->mechanism.Poses(q_, &poses_);
 
+  int slot_count = 0;
+  for (const ContactPairSpec& pair : scene->pairs) slot_count += pair.max_contacts;
+  if (slot_count > kMaxContacts) {
+    throw SceneError(scene->path + ": the contact pairs reserve " + std::to_string(slot_count) +
+                     " contact slots, more than " + std::to_string(kMaxContacts));
+  }
   // Contacts present at the initial poses: one cold global pass.
   std::vector<contact::ContactEvent> events;
   {
     contact::GlobalContactStage stage(GlobalSurfaces(), GlobalPairs(), contact::GlobalOptions{});
     stage.Run(poses_, {}, &events);
   }
-  int slot_count = 0;
-  for (size_t k = 0; k < scene->pairs.size(); ++k) {
-    const ContactPairSpec& pair = scene->pairs[k];
-    slot_count += pair.max_contacts;
-  }
-  if (slot_count > kMaxContacts) {
-    throw SceneError(scene->path + ": the contact pairs reserve " + std::to_string(slot_count) +
-                     " contact slots, more than " + std::to_string(kMaxContacts));
-  }
-  for (size_t k = 0; k < scene->pairs.size(); ++k) {
-    const ContactPairSpec& pair = scene->pairs[k];
+  for (const ContactPairSpec& pair : scene->pairs) {
     const SceneSurface& sa = scene->surfaces[static_cast<size_t>(pair.surface_a)];
     const SceneSurface& sb = scene->surfaces[static_cast<size_t>(pair.surface_b)];
     const int lo = std::min(pair.surface_a, pair.surface_b);
@@ -117,8 +80,8 @@ ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene),
         // Not touching yet: the closest pair of samples, if near enough for the settling solve
         // to bring the surfaces together.
         double d = 0.0;
-        seed = ClosestSamples(f.surface, poses_[static_cast<size_t>(f.body)], g.surface,
-                              poses_[static_cast<size_t>(g.body)], 40, &d);
+        seed = contact::ClosestSamplePair(f.surface, poses_[static_cast<size_t>(f.body)], g.surface,
+                                          poses_[static_cast<size_t>(g.body)], 40, &d);
         if (d > 5e-3) {
           throw SceneError(scene->path + ": floating contact between \"" + sa.name + "\" and \"" +
                            sb.name + "\": the surfaces are " + std::to_string(d * 1e3) +
@@ -127,7 +90,7 @@ ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene),
       }
       auto term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface, seed);
       p.AddEquality(term);
-      slots_.push_back({static_cast<int>(k), -1, true, term});
+      slots_.push_back({lo, hi, -1, true, term});
       continue;
     }
     for (int m = 0; m < pair.max_contacts; ++m) {
@@ -135,8 +98,7 @@ ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene),
                                                 Eigen::Vector4d::Constant(0.5));
       term->Deactivate();
       const int index = p.AddInequality(term);
-      slots_.push_back(
-          {static_cast<int>(k), p.inequalities()[static_cast<size_t>(index)].row, false, term});
+      slots_.push_back({lo, hi, p.inequalities()[static_cast<size_t>(index)].row, false, term});
     }
   }
   for (const auto& e : events) {
@@ -153,8 +115,7 @@ ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene),
   // orientation goal with the rotational stiffness relative to the translational one.
   grasp_at_ = optimizer::Attachment{scene->grasp.body, scene->grasp.point};
   const contact::BodyPose& gp = poses_[static_cast<size_t>(scene->grasp.body)];
-  last_target_ = gp.Point(scene->grasp.point);
-  grasp_ = optimizer::MakePositionGoal(grasp_at_, last_target_);
+  grasp_ = optimizer::MakePositionGoal(grasp_at_, gp.Point(scene->grasp.point));
   p.AddObjective(grasp_, 1.0);
   if (options.dof == 6) {
     grasp_orientation_ =
@@ -200,44 +161,32 @@ std::vector<std::pair<int, int>> ServoLoop::GlobalPairs() const {
 bool ServoLoop::Apply(const ContactEventMsg& e) {
   const int lo = std::min(e.surface_a, e.surface_b), hi = std::max(e.surface_a, e.surface_b);
   const Eigen::Vector4d u(e.u[0], e.u[1], e.u[2], e.u[3]);
-  Slot* best = nullptr;
-  double best_d = 1e300;
+  // Among this pair's unilateral slots: the active one nearest to u, and a free one.
+  Slot* nearest = nullptr;
+  Slot* free = nullptr;
+  double nearest_d = INFINITY;
   for (Slot& s : slots_) {
-    const ContactPairSpec& pair = scene_->pairs[static_cast<size_t>(s.pair)];
-    if (std::min(pair.surface_a, pair.surface_b) != lo ||
-        std::max(pair.surface_a, pair.surface_b) != hi || s.floating) {
+    if (s.floating || s.surface_a != lo || s.surface_b != hi) continue;
+    if (!s.term->active()) {
+      if (!free) free = &s;
       continue;
     }
-    if (e.added) {
-      if (s.term->active() && ParameterDistance(scene_->surfaces[static_cast<size_t>(lo)].surface,
-                                                scene_->surfaces[static_cast<size_t>(hi)].surface,
-                                                s.term->extremum().u, u) < 0.03) {
-        return true;  // already tracked (the event raced the snapshot)
-      }
-      continue;
-    }
-    if (!s.term->active()) continue;
     const double d = ParameterDistance(scene_->surfaces[static_cast<size_t>(lo)].surface,
                                        scene_->surfaces[static_cast<size_t>(hi)].surface,
                                        s.term->extremum().u, u);
-    if (d < best_d) {
-      best_d = d;
-      best = &s;
+    if (d < nearest_d) {
+      nearest_d = d;
+      nearest = &s;
     }
   }
-  if (e.added) {
-    for (Slot& s : slots_) {
-      const ContactPairSpec& pair = scene_->pairs[static_cast<size_t>(s.pair)];
-      if (!s.floating && !s.term->active() && std::min(pair.surface_a, pair.surface_b) == lo &&
-          std::max(pair.surface_a, pair.surface_b) == hi) {
-        s.term->Activate(u);
-        return true;
-      }
-    }
-    return false;
+  if (!e.added) {
+    if (nearest) nearest->term->Deactivate();
+    return nearest != nullptr;
   }
-  if (best) best->term->Deactivate();
-  return best != nullptr;
+  if (nearest && nearest_d < 0.03) return true;  // already tracked (the event raced a snapshot)
+  if (!free) return false;
+  free->term->Activate(u);
+  return true;
 }
 
 Eigen::Vector3d ServoLoop::ToolPoint(const DeviceSample& d) const {
@@ -349,13 +298,11 @@ void ServoLoop::FillSnapshot(Snapshot* s) const {
   }
   int n = 0;
   const Eigen::VectorXd& lambda = solver_->inequality_multipliers();
-  const Eigen::VectorXd& lambda_e = solver_->equality_multipliers();
   for (const Slot& slot : slots_) {
     if (!slot.term->active() || n >= kMaxContacts) continue;
-    const ContactPairSpec& pair = scene_->pairs[static_cast<size_t>(slot.pair)];
     TrackedContact& c = s->contacts[n++];
-    c.surface_a = std::min(pair.surface_a, pair.surface_b);
-    c.surface_b = std::max(pair.surface_a, pair.surface_b);
+    c.surface_a = slot.surface_a;
+    c.surface_b = slot.surface_b;
     c.body_a = scene_->surfaces[static_cast<size_t>(c.surface_a)].body;
     c.body_b = scene_->surfaces[static_cast<size_t>(c.surface_b)].body;
     const contact::SurfaceSurfaceExtremum& e = slot.term->extremum();
@@ -365,7 +312,6 @@ void ServoLoop::FillSnapshot(Snapshot* s) const {
       c.p_a[i] = e.p_f[i];
       c.p_b[i] = e.p_g[i];
     }
-    (void)lambda_e;
     c.force = slot.row >= 0 && slot.row < lambda.size()
                   ? scene_->device.stiffness * lambda[slot.row]
                   : 0.0;

@@ -50,7 +50,7 @@ struct Snapshot {
   int32_t num_contacts = 0;
   TrackedContact contacts[kMaxContacts] = {};
   double grasp_target[3] = {0, 0, 0};
-  int64_t events_applied = 0;  ///< contact events the servo has taken (applied or dropped)
+  int64_t events_taken = 0;  ///< contact events the servo has taken (applied or dropped)
 };
 
 /// Global stage → servo: one contact event (plain data, for the SPSC ring).
@@ -126,8 +126,8 @@ class ServoLoop {
 
  private:
   struct Slot {
-    int pair = 0;
-    int row = 0;  ///< inequality row (multiplier index)
+    int surface_a = 0, surface_b = 0;  ///< the pair's surfaces, a < b (the terms' f and g)
+    int row = 0;                       ///< inequality row (multiplier index)
     bool floating = false;
     std::shared_ptr<optimizer::SurfaceContactTerm> term;
   };
@@ -151,7 +151,6 @@ class ServoLoop {
   int64_t last_tick_ns_ = 0;
   int64_t ticks_ = 0;
   bool have_error_ = false;
-  Eigen::Vector3d last_target_ = Eigen::Vector3d::Zero();
   Eigen::Matrix<double, 9, 1> r9_;
   Eigen::Matrix<double, 9, 7> J9_, J9b_;
 };

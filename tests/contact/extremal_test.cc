@@ -92,7 +92,7 @@ TEST(ExtremalTest, CrossedCylindersMatchSkewLineDistance) {
         {0, -0.1, c},
         Eigen::Quaterniond(Eigen::AngleAxisd(-std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
     const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(qg);
-    const Eigen::Vector4d seed = testing::ClosestGridPair(cyl, pf, cyl, pg, 24);
+    const Eigen::Vector4d seed = ClosestSamplePair(cyl, pf, cyl, pg, 24);
     const SurfaceSurfaceExtremum e = SolveSurfaceSurface(cyl, pf, cyl, pg, seed);
     ASSERT_EQ(e.status, ExtremalStatus::kConverged) << ToString(e.status);
     EXPECT_NEAR(std::abs(e.beta), std::abs(c - 0.02), kPosTol) << "c=" << c;

@@ -153,8 +153,8 @@ TEST(HardCasesTest, PartialsMeetingAtAFewDegrees) {
       {-0.03, 0.0, 0.025},
       Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX())));
   const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(kIdentity);
-  const SurfaceSurfaceExtremum e = SolveSurfaceSurface(
-      sheared, pf, torus, pg, testing::ClosestGridPair(sheared, pf, torus, pg, 60));
+  const SurfaceSurfaceExtremum e =
+      SolveSurfaceSurface(sheared, pf, torus, pg, ClosestSamplePair(sheared, pf, torus, pg, 60));
   ASSERT_EQ(e.status, ExtremalStatus::kConverged);
   nurbs::SpanHint h1, h2;
   SurfacePairEval ev;

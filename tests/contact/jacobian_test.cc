@@ -131,7 +131,7 @@ TEST(JacobianTest, SpherePlaneOrthogonal) {
         testing::Transform(x, Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
     const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(qg);
     CheckCase({"sphere-plane pose " + std::to_string(pose), &sphere, &plane, qf, qg,
-               testing::ClosestGridPair(sphere, pf, plane, pg, 30), true},
+               ClosestSamplePair(sphere, pf, plane, pg, 30), true},
               0.01);
   }
 }
@@ -147,9 +147,9 @@ TEST(JacobianTest, CrossedCylindersOrthogonal) {
       Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
                          Eigen::AngleAxisd(-std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
   const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(qg);
-  CheckCase({"crossed cylinders", &cyl, &cyl, qf, qg,
-             testing::ClosestGridPair(cyl, pf, cyl, pg, 30), true},
-            0.004);
+  CheckCase(
+      {"crossed cylinders", &cyl, &cyl, qf, qg, ClosestSamplePair(cyl, pf, cyl, pg, 30), true},
+      0.004);
 }
 
 TEST(JacobianTest, ShearedPatchAgainstTorusNonOrthogonal) {
@@ -173,11 +173,11 @@ TEST(JacobianTest, ShearedPatchAgainstTorusNonOrthogonal) {
         testing::Transform(x, Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
     const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(qg);
     CheckCase({"sheared-torus pose " + std::to_string(pose), &sheared, &torus, qf, qg,
-               testing::ClosestGridPair(sheared, pf, torus, pg, 40), false},
+               ClosestSamplePair(sheared, pf, torus, pg, 40), false},
               0.002);
     // And with the roles swapped (the torus as f, the sheared patch as g).
     CheckCase({"torus-sheared pose " + std::to_string(pose), &torus, &sheared, qg, qf,
-               testing::ClosestGridPair(torus, pg, sheared, pf, 40), false},
+               ClosestSamplePair(torus, pg, sheared, pf, 40), false},
               0.002);
   }
 }
@@ -209,7 +209,7 @@ TEST(JacobianTest, RandomRationalBicubicAgainstSphere) {
   const Vector7d qg = Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity());
   const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(qg);
   CheckCase({"sphere-rational sheet", &sphere, &sheet, qf, qg,
-             testing::ClosestGridPair(sphere, pf, sheet, pg, 30), false},
+             ClosestSamplePair(sphere, pf, sheet, pg, 30), false},
             0.003);
 }
 

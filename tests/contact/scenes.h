@@ -29,39 +29,6 @@ inline Vector7d Transform(const Eigen::Isometry3d& x, const Vector7d& q) {
   return Coordinates(x * Eigen::Vector3d(q.head<3>()), Eigen::Quaterniond(x.rotation()) * rot);
 }
 
-/// Seed (u,v,s,t) of the closest pair over n x n grids on both surfaces (separated pairs).
-inline Eigen::Vector4d ClosestGridPair(const nurbs::NurbsSurface& f, const BodyPose& pf,
-                                       const nurbs::NurbsSurface& g, const BodyPose& pg, int n) {
-  auto grid = [n](const nurbs::NurbsSurface& s, const BodyPose& p) {
-    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector3d>> pts;
-    for (int i = 0; i <= n; ++i) {
-      for (int j = 0; j <= n; ++j) {
-        const double u =
-            s.knots_u().domain_begin() +
-            (s.knots_u().domain_end() - s.knots_u().domain_begin()) * (i + 0.5) / (n + 1);
-        const double v =
-            s.knots_v().domain_begin() +
-            (s.knots_v().domain_end() - s.knots_v().domain_begin()) * (j + 0.5) / (n + 1);
-        pts.push_back({{u, v}, p.Point(s.Evaluate(u, v, 0).S)});
-      }
-    }
-    return pts;
-  };
-  const auto a = grid(f, pf), b = grid(g, pg);
-  double best = INFINITY;
-  Eigen::Vector4d seed;
-  for (const auto& x : a) {
-    for (const auto& y : b) {
-      const double d = (x.second - y.second).squaredNorm();
-      if (d < best) {
-        best = d;
-        seed << x.first, y.first;
-      }
-    }
-  }
-  return seed;
-}
-
 /// A surface pair on two bodies.
 struct Pair {
   const char* name;

@@ -38,7 +38,7 @@ TEST(TrackerTest, FollowsTheExactExtremumAtServoRateWithoutAllocating) {
   const BodyPose pf = BodyPose::FromCoordinates(s.Patch(0)),
                  pg = BodyPose::FromCoordinates(s.Torus());
   const SurfaceSurfaceExtremum start = SolveSurfaceSurface(
-      s.sheared, pf, s.torus, pg, testing::ClosestGridPair(s.sheared, pf, s.torus, pg, 40));
+      s.sheared, pf, s.torus, pg, ClosestSamplePair(s.sheared, pf, s.torus, pg, 40));
   ASSERT_EQ(start.status, ExtremalStatus::kConverged);
   ContactTracker tracker(s.sheared, s.torus);
   ASSERT_EQ(tracker.Reset(s.Patch(0), s.Torus(), start.u), TrackStatus::kTracked);

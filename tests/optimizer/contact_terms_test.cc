@@ -91,8 +91,8 @@ TEST(ContactTermsTest, SurfaceContactDerivativesMatchFiniteDifferences) {
       s.mech.Poses(q, &poses);
       const auto term = MakeSurfaceContact(
           s.a, &s.sphere, s.b, &s.patch,
-          contact::testing::ClosestGridPair(s.sphere, poses[static_cast<size_t>(s.a)], s.patch,
-                                            poses[static_cast<size_t>(s.b)], 23));
+          contact::ClosestSamplePair(s.sphere, poses[static_cast<size_t>(s.a)], s.patch,
+                                     poses[static_cast<size_t>(s.b)], 23));
       const double beta = Value(s.mech, *term, q, nullptr);
       ASSERT_EQ(term->extremum().status, contact::ExtremalStatus::kConverged);
       EXPECT_NEAR(beta, gap, 0.015);  // the bump and the offsets move it by millimetres

@@ -66,8 +66,8 @@ TEST(SolverTest, FourBarDraggedThroughAFloatingSurfaceContactKeepsItExact) {
   std::vector<BodyPose> poses;
   fb.mechanism.Poses(fb.mechanism.InitialCoordinates(), &poses);
   const Eigen::Vector4d seed =
-      contact::testing::ClosestGridPair(fb.tip, poses[static_cast<size_t>(fb.finger)], fb.pad,
-                                        poses[static_cast<size_t>(fb.coupler)], 47);
+      contact::ClosestSamplePair(fb.tip, poses[static_cast<size_t>(fb.finger)], fb.pad,
+                                 poses[static_cast<size_t>(fb.coupler)], 47);
   std::shared_ptr<PositionGoalTerm> goal;
   std::shared_ptr<SurfaceContactTerm> contact;
   const Problem p = fb.MakeProblem(&goal, &contact, seed);
