@@ -40,6 +40,7 @@ Solver::Solver(const Problem& problem, const SolverOptions& options)
   q_try_.setZero(n_);
   q_best_.setZero(n_);
   shifted_.setZero(problem.num_inequality_rows());
+  active_.assign(static_cast<size_t>(problem.num_inequality_rows()), 0);
   kkt_.setZero(n_);
   grad_e_.setZero(n_);
   linearized_e_.setZero(problem.num_equality_rows());
@@ -69,21 +70,23 @@ void Solver::Reset() {
 }
 
 void Solver::AugmentedGradient() {
-  // g = ∇L = ∇E − J_Eᵀ(λ_E − μ c_E) − J_Iᵀ max(0, λ_I − μ c_I), from the KKT residual
-  // ∇E − J_Eᵀλ_E − J_Iᵀλ_I in kkt_: g = kkt + J_Eᵀ(μ c_E) + J_Iᵀ(λ_I − shifted).
+  // g = ∇L = ∇E − J_Eᵀ(λ_E − μ c_E) − J_Aᵀ(λ_A − μ c_A), from the KKT residual
+  // ∇E − J_Eᵀλ_E − J_Iᵀλ_I in kkt_: g = kkt + J_Eᵀ(μ c_E) + J_Iᵀ(λ_I − shifted), where an active
+  // row's shifted multiplier is λ − μc (the row is an equality of this step) and an inactive
+  // row's is 0.
   g_ = kkt_;
   ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, ev_.c_e(), mu_, &g_);
   for (int i = 0; i < ev_.c_i().size(); ++i) {
-    shifted_[i] = std::max(0.0, lambda_i_[i] - mu_ * ev_.c_i()[i]);
+    shifted_[i] = active_[i] ? lambda_i_[i] - mu_ * ev_.c_i()[i] : 0.0;
     jstep_i_[i] = lambda_i_[i] - shifted_[i];  // (scratch)
   }
   ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, jstep_i_, 1.0, &g_);
 }
 
 double Solver::NewtonMatrix() {
-  // H = w_la M + Σ w J_oᵀJ_o + μ J_EᵀJ_E + μ J_AᵀJ_A (A: rows with positive shifted multiplier,
-  // as left by AugmentedGradient), plus the Lagrangian's curvature: objectives weighted by w r,
-  // equalities by −λ_E, active inequalities by −λ_I. Assembled block by block.
+  // H = w_la M + Σ w J_oᵀJ_o + μ J_EᵀJ_E + μ J_AᵀJ_A (A: the active inequality rows), plus the
+  // Lagrangian's curvature: objectives weighted by w r, equalities by −λ_E, active inequalities by
+  // −λ_I. Assembled block by block.
   H_.SetZero();
   const double w_la = problem_.least_astonishment();
   for (size_t b = 0; b < M_.size(); ++b) {
@@ -94,7 +97,7 @@ double Solver::NewtonMatrix() {
   const double objective_scale = H_.MaxAbsDiagonal() + 1e-300;
   gn_e_.setConstant(mu_);
   ev_.AddGaussNewton(ProblemEvaluator::kEquality, gn_e_, &H_);
-  for (int i = 0; i < ev_.c_i().size(); ++i) gn_i_[i] = shifted_[i] > 0.0 ? mu_ : 0.0;
+  for (int i = 0; i < ev_.c_i().size(); ++i) gn_i_[i] = active_[i] ? mu_ : 0.0;
   ev_.AddGaussNewton(ProblemEvaluator::kInequality, gn_i_, &H_);
   for (const Problem::Entry& o : problem_.objectives()) {
     weights_.segment(o.row, o.term->dim()) = o.weight * ev_.r_o().segment(o.row, o.term->dim());
@@ -102,7 +105,7 @@ double Solver::NewtonMatrix() {
   ev_.AddCurvature(ProblemEvaluator::kObjective, weights_, &H_);
   weights_.head(ev_.c_e().size()) = -lambda_e_;
   ev_.AddCurvature(ProblemEvaluator::kEquality, weights_, &H_);
-  for (int i = 0; i < ev_.c_i().size(); ++i) weights_[i] = shifted_[i] > 0.0 ? -lambda_i_[i] : 0.0;
+  for (int i = 0; i < ev_.c_i().size(); ++i) weights_[i] = active_[i] ? -lambda_i_[i] : 0.0;
   ev_.AddCurvature(ProblemEvaluator::kInequality, weights_, &H_);
   ev_.FoldRotations(&H_);
   return objective_scale;
@@ -142,7 +145,8 @@ void Solver::SecondOrderCheck(const Eigen::VectorXd& q, SolveStats* st) {
   ev_.Evaluate(q);
   ev_.ObjectiveGradient(q, q_prev_, M_, &grad_e_);
   kkt_ = grad_e_;
-  AugmentedGradient();  // (sets the active set from the multipliers)
+  for (int i = 0; i < ev_.c_i().size(); ++i) active_[i] = lambda_i_[i] > 0.0;
+  AugmentedGradient();
   const double mu = mu_;
   mu_ = 0.0;
   NewtonMatrix();
@@ -190,10 +194,46 @@ void Solver::Normalize(Eigen::VectorXd* q) const {
   }
 }
 
+double Solver::Complementarity() const {
+  double v = 0.0;
+  for (int i = 0; i < ev_.c_i().size(); ++i) {
+    if (lambda_i_[i] > 0.0) v = std::max(v, ev_.c_i()[i]);
+  }
+  return v;
+}
+
 double Solver::Violation() const {
   double v = ev_.c_e().size() ? ev_.c_e().cwiseAbs().maxCoeff() : 0.0;
   for (int i = 0; i < ev_.c_i().size(); ++i) v = std::max(v, -ev_.c_i()[i]);
   return v;
+}
+
+double Solver::NewtonStep() {
+  AugmentedGradient();
+  const double objective_scale = NewtonMatrix();
+  // Levenberg damping until positive definite (the Lagrangian's curvature may not be). Its
+  // scale is the objective's part of the matrix, not μJᵀJ's: the curvature along a
+  // mechanism's free motions is of the objective's size, and damping sized by μ|J|² (here
+  // 1e6 larger) would shorten every Newton step (measured: half the step, 4.5 iterations
+  // per warm solve instead of 3).
+  //
+  // The same damping is the trust region: a step that turns a body by more than
+  // max_rotation_step (|ΔQ|) or moves it more than max_translation_step is recomputed with
+  // ten times the damping (Levenberg–Marquardt). A barely positive definite matrix otherwise
+  // gives an enormous step along its weakest direction (measured: a paperclip hanging on two
+  // contacts, free to spin about the line through them, flipped 186° in one step).
+  double lm = options_.damping * objective_scale;
+  H_.AddToDiagonal(lm);
+  for (int attempt = 0; attempt < 40; ++attempt) {
+    if (Factorize()) {
+      SolveStep();
+      if (StepWithinTrustRegion()) break;
+    }
+    const double more = std::max(1e-8 * objective_scale, 10 * lm);
+    H_.AddToDiagonal(more - lm);
+    lm = more;
+  }
+  return lm;
 }
 
 SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
@@ -220,7 +260,10 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &kkt_);
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, &kkt_);
     st.kkt_residual = kkt_.size() ? kkt_.cwiseAbs().maxCoeff() : 0.0;
+    // Converged: feasible, stationary, and complementary (no force on a separated contact).
+    st.complementarity = Complementarity();
     if (st.max_violation <= options_.constraint_tolerance &&
+        st.complementarity <= options_.constraint_tolerance &&
         st.kkt_residual <= options_.kkt_tolerance) {
       st.converged = true;
       break;
@@ -241,29 +284,26 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
       st.budget_exhausted = true;
       break;
     }
-    AugmentedGradient();
-    const double objective_scale = NewtonMatrix();
-    // Levenberg damping until positive definite (the Lagrangian's curvature may not be). Its
-    // scale is the objective's part of the matrix, not μJᵀJ's: the curvature along a
-    // mechanism's free motions is of the objective's size, and damping sized by μ|J|² (here
-    // 1e6 larger) would shorten every Newton step (measured: half the step, 4.5 iterations
-    // per warm solve instead of 3).
-    //
-    // The same damping is the trust region: a step that turns a body by more than
-    // max_rotation_step (|ΔQ|) or moves it more than max_translation_step is recomputed with
-    // ten times the damping (Levenberg–Marquardt). A barely positive definite matrix otherwise
-    // gives an enormous step along its weakest direction (measured: a paperclip hanging on two
-    // contacts, free to spin about the line through them, flipped 186° in one step).
-    double lm = options_.damping * objective_scale;
-    H_.AddToDiagonal(lm);
-    for (int attempt = 0; attempt < 40; ++attempt) {
-      if (Factorize()) {
-        SolveStep();
-        if (StepWithinTrustRegion()) break;
+    // The inequalities' active set is the step's own (a primal-dual active-set, i.e. semismooth
+    // Newton, iteration on λ⁺ = max(0, λ − μ(c + JΔq))): guessed from the multipliers and the
+    // constraints at q, then corrected from the linearized constraints after the step until the
+    // step and its active set agree. The guess alone (PHR's λ − μc > 0) drops a loaded contact
+    // whose second-order residual after the last step is positive (c ≈ 7e-7 m ≫ λ/μ ≈ 2e-10),
+    // and the unconstrained step then runs through it (measured on the paperclip drag: ticks
+    // cycling through the 10-iteration budget, 8 % of them).
+    for (int i = 0; i < ev_.c_i().size(); ++i) {
+      active_[i] = lambda_i_[i] - mu_ * ev_.c_i()[i] > 0.0;
+    }
+    for (int pass = 0; pass < options_.max_active_set_passes; ++pass) {
+      NewtonStep();
+      ev_.JacobianTimes(ProblemEvaluator::kInequality, step_, &jstep_i_);
+      bool changed = false;
+      for (int i = 0; i < ev_.c_i().size(); ++i) {
+        const bool want = lambda_i_[i] - mu_ * (ev_.c_i()[i] + jstep_i_[i]) > 0.0;
+        changed |= want != active_[i];
+        active_[i] = want;
       }
-      const double more = std::max(1e-8 * objective_scale, 10 * lm);
-      H_.AddToDiagonal(more - lm);
-      lm = more;
+      if (!changed) break;
     }
     // Safeguard for steps far from a solution: halve while the violation after the step exceeds
     // what a Newton step may leave, second order in the step (10 |Δq|², joint rows curve like
@@ -271,7 +311,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     // (A first-order test, measured: a warm 5e-3 step leaving 2.5e-5 was cut to 1/8, its
     // multipliers updated from the short step, and the solve took 5 iterations instead of 3.)
     ev_.JacobianTimes(ProblemEvaluator::kEquality, step_, &jstep_e_);
-    ev_.JacobianTimes(ProblemEvaluator::kInequality, step_, &jstep_i_);
+    ev_.JacobianTimes(ProblemEvaluator::kInequality, step_, &jstep_i_);  // (the last pass's step)
     linearized_e_ = ev_.c_e();  // c at the current point, before trial evaluations replace it
     linearized_i_ = ev_.c_i();
     const double step2 = step_.squaredNorm();
@@ -298,6 +338,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     // Out of iterations: the last step's point has not been scored yet (ev_ is at q).
     ev_.ObjectiveGradient(q, q_prev_, M_, &grad_e_);
     st.max_violation = Violation();
+    st.complementarity = Complementarity();
     kkt_ = grad_e_;
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &kkt_);
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, &kkt_);
@@ -311,6 +352,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
       ev_.Evaluate(q);
       st.max_violation = best_violation;
       st.kkt_residual = best_kkt;
+      st.complementarity = Complementarity();
     }
   }
   st.objective = ev_.Objective(q, q_prev_, M_);

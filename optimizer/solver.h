@@ -1,6 +1,7 @@
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
@@ -31,6 +32,9 @@ struct SolverOptions {
   /// unit quaternion) and |Δp| in metres (0: no limit). Warm servo steps stay far below.
   double max_rotation_step = 0.2;
   double max_translation_step = 0.0;
+  /// Newton steps per iteration while the inequalities' active set changes (its guess from the
+  /// multipliers, then its corrections from the linearized constraints after the step).
+  int max_active_set_passes = 4;
   /// Compute the reduced-Hessian statistic after each solve (dense eigen-decomposition,
   /// allocates: for tests and design studies, not for the servo loop).
   bool second_order_check = false;
@@ -43,6 +47,9 @@ struct SolveStats {
   int iterations = 0;  ///< Newton iterations
   double max_violation = 0.0;
   double kkt_residual = 0.0;
+  /// Largest constraint value of an inequality row carrying a positive multiplier (a force on
+  /// a separated contact); converged solves have it within constraint_tolerance.
+  double complementarity = 0.0;
   double objective = 0.0;
   double penalty = 1e6;
   bool converged = false;
@@ -61,8 +68,11 @@ struct SolveStats {
 /// with λ̄ the current multipliers. Eliminating the multiplier step leaves the dense n x n system
 ///   (∇²E − Σλ_i∇²c_i + μ J_EᵀJ_E + μ J_AᵀJ_A) Δq = −(∇E − J_Eᵀ(λ_E − μc_E) − J_Iᵀ max(0, λ_I −
 ///   μc_I))
-/// (LDLᵀ; A the inequality rows with positive shifted multiplier), then λ ← λ − μ(c + JΔq) from the
-/// linearized constraints. The curvature is exact where terms provide second derivatives
+/// (LDLᵀ; A the active inequality rows), then λ ← λ − μ(c + JΔq) from the linearized constraints.
+/// The active set is the step's own: guessed from λ − μc > 0, then corrected from the linearized
+/// constraints, λ − μ(c + JΔq) > 0, and the step recomputed until they agree (primal-dual active
+/// set). Converged means feasible, stationary and complementary (no multiplier on a row with
+/// c > tolerance). The curvature is exact where terms provide second derivatives
 /// (Term::AddWeightedHessian), Gauss–Newton otherwise; Levenberg damping makes the matrix positive
 /// definite where it is not; a step is halved while it would raise the violation tenfold.
 /// Near a warm start this is Newton's method on the KKT system (quadratic convergence), and the
@@ -90,8 +100,12 @@ class Solver {
   /// Builds H_; returns the scale of its objective part (for the damping).
   double NewtonMatrix();
   double Violation() const;
+  double Complementarity() const;
   void Normalize(Eigen::VectorXd* q) const;
 
+  /// Assembles and factorizes the Newton matrix for the current active set and solves for step_
+  /// (damped until positive definite and within the trust region); @return the damping used.
+  double NewtonStep();
   bool Factorize();
   void SolveStep();
   void SecondOrderCheck(const Eigen::VectorXd& q, SolveStats* st);
@@ -112,6 +126,7 @@ class Solver {
   // factorization, measured). Bodies are numbered along their chains, which keeps fill low.
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
       ldlt_;
+  std::vector<char> active_;  ///< inequality rows in the current step's active set
   double mu_ = 0.0;
 };
 

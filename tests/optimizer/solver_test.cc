@@ -6,8 +6,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
+#include "nurbs/primitives.h"
+#include "optimizer/contacts.h"
+#include "optimizer/goals.h"
 #include "optimizer/interaction.h"
 #include "tests/contact/scenes.h"
 #include "tests/optimizer/fourbar.h"
@@ -304,6 +309,70 @@ TEST(SolverTest, JointLimitsHoldAsInequalities) {
     EXPECT_GE(a, -0.2 - 1e-10);
     EXPECT_LE(a, 0.2 + 1e-10);
   }
+}
+
+// A probe pressed onto a ball by a goal inside it and dragged round the equator: a loaded
+// contact on a curved surface as a warm-started inequality (the servo loop's situation). After
+// each tangential step the exact constraint is positive by the step's second order while its
+// multiplier is not, so the inequality's active set must come from the step, not from the
+// current point (PHR's λ − μc > 0 drops it and the step runs into the ball).
+TEST(SolverTest, ALoadedContactOnACurvedSurfaceStaysActiveWhileDragged) {
+  constexpr double radius = 0.01;
+  const nurbs::NurbsSurface ball = nurbs::MakeSphere(Eigen::Vector3d::Zero(), radius);
+  auto run = [&](int active_set_passes, double* mean_iterations, int* budget_hits,
+                 double* worst_violation, double* worst_complementarity, double* load) {
+    Mechanism m;
+    const int fixed = m.AddBody(Body{"ball", true});
+    Body probe_body{"probe"};
+    probe_body.pose << radius, 0, 0, 1, 0, 0, 0;
+    const int probe = m.AddBody(probe_body);
+    Problem p(m);
+    const Attachment tip{probe, {0, 0, 0}};
+    auto goal = MakePositionGoal(tip, {0.6 * radius, 0, 0});
+    p.AddObjective(goal, 1.0);
+    p.AddInequality(MakePointOnSurface(tip, fixed, &ball, {0.0, 0.5}));
+    SolverOptions o;
+    o.max_iterations = 10;
+    o.max_active_set_passes = active_set_passes;
+    Solver s(p, o);
+    Eigen::VectorXd q = m.InitialCoordinates();
+    s.Solve(&q);
+    int iterations = 0;
+    *budget_hits = 0;
+    *worst_violation = *worst_complementarity = 0.0;
+    constexpr int kSteps = 400;
+    for (int k = 1; k <= kSteps; ++k) {  // 0.02 rad (0.2 mm along the surface) per step
+      const double a = 0.02 * k;
+      goal->set_target(0.6 * radius * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0));
+      const SolveStats st = s.Solve(&q);
+      iterations += st.iterations;
+      *budget_hits += !st.converged;
+      *worst_violation = std::max(*worst_violation, st.max_violation);
+      *worst_complementarity = std::max(*worst_complementarity, st.complementarity);
+    }
+    *mean_iterations = static_cast<double>(iterations) / kSteps;
+    *load = s.inequality_multipliers()[0];
+  };
+  double mean = 0.0, worst = 0.0, comp = 0.0, load = 0.0;
+  int hits = 0;
+  run(1, &mean, &hits, &worst, &comp, &load);  // the guess alone
+  std::printf(
+      "probe on a ball, active set guessed from the point: iterations mean %.2f, "
+      "%d of 400 solves at the budget, worst violation %.1e\n",
+      mean, hits, worst);
+  const int guess_hits = hits;
+  run(SolverOptions{}.max_active_set_passes, &mean, &hits, &worst, &comp, &load);
+  std::printf(
+      "probe on a ball, active set from the step: iterations mean %.2f, %d at the "
+      "budget, worst violation %.1e, complementarity %.1e\n",
+      mean, hits, worst, comp);
+  EXPECT_EQ(hits, 0);
+  EXPECT_LE(mean, 3.0);
+  EXPECT_LE(worst, 1e-10);
+  EXPECT_LE(comp, 1e-10);
+  // The contact carries the goal's pull, weight x 0.4 radius (least astonishment aside).
+  EXPECT_NEAR(load, 0.4 * radius, 1e-6 * radius);
+  EXPECT_GT(guess_hits, 0);  // the failure this guards against, reproduced
 }
 
 }  // namespace

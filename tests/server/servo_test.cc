@@ -57,7 +57,7 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
   // Drag: lift 6 mm and circle (the phantom's "drag" path, without device dynamics), 1 kHz device
   // states, 4 servo ticks each, a global pass every 4 ticks.
   double worst = 0.0, max_force = 0.0, force_lifted = 0.0;
-  int events_applied = 0;
+  int events_applied = 0, budget_ticks = 0, ticks = 0;
   long allocations = 0;
   int64_t seq = 1000;
   for (int k = 0; k < 6000; ++k) {
@@ -72,6 +72,8 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
       allocations += tangent::testing::AllocationCount() - before;
       now += 250'000;
       worst = std::max(worst, r.violation);
+      budget_ticks += r.iterations >= ServoOptions{}.max_iterations;
+      ++ticks;
       if (r.answered) {
         const double f =
             Eigen::Vector3d(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]).norm();
@@ -95,9 +97,14 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
   }
   std::printf(
       "paperclip servo: rest violation %.1e, drag worst violation %.1e, force when lifted %.2f N, "
-      "max %.2f N, contacts now %d, events applied %d, allocations %ld\n",
-      rest, worst, force_lifted, max_force, servo.active_contacts(), events_applied, allocations);
-  EXPECT_LE(worst, 1e-6);
+      "max %.2f N, contacts now %d, events applied %d, allocations %ld, ticks at the iteration "
+      "budget %d of %d\n",
+      rest, worst, force_lifted, max_force, servo.active_contacts(), events_applied, allocations,
+      budget_ticks, ticks);
+  EXPECT_LE(worst, 1e-9);  // (issue 6 asks 1e-6)
+  // The hooks stay loaded through the drag: their contacts must not cycle through the budget
+  // (8 % of ticks did while the active set came from the current point alone).
+  EXPECT_LE(budget_ticks, ticks / 200);
   EXPECT_GT(force_lifted, 0.3);  // the hooks hold the chain back: the hand feels the pull
   EXPECT_LE(max_force, scene->device.max_force + 1e-12);
   EXPECT_EQ(allocations, 0);

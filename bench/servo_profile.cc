@@ -1,0 +1,96 @@
+// The servo tick's compute on one thread, without scheduling noise (issue 6): the paperclip
+// scene dragged along the phantom's "drag" path (lift 6 mm over 2 s, then 4 mm circles), a device
+// state every millisecond, four ticks per state, one global pass after every four ticks, its
+// events applied between ticks. Reports the tick time distribution, the solver's iteration
+// histogram, ticks at the iteration budget, the worst violation and complementarity (the largest
+// gap of a contact carrying force). Deterministic apart from the clock: the figures to compare
+// solver changes by; server_rate is the threaded test of the targets.
+//
+//   ./build/bench/servo_profile [--steps 8000] [--iterations 10] [--kkt 1e-8]
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "server/servo.h"
+
+using namespace tangent::server;
+
+int main(int argc, char** argv) {
+  int steps = 8000;
+  ServoOptions so;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--steps")) steps = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--iterations")) so.max_iterations = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--kkt")) so.kkt_tolerance = std::atof(argv[i + 1]);
+  }
+  auto scene = LoadScene(std::string(TANGENT_SCENES_DIR) + "/paperclips.json");
+  ServoLoop servo(scene.get(), so);
+  tangent::contact::GlobalContactStage stage(servo.GlobalSurfaces(), servo.GlobalPairs(),
+                                             tangent::contact::GlobalOptions{});
+  std::vector<tangent::contact::BodyPose> poses;
+  std::vector<tangent::contact::GlobalContact> tracked;
+  std::vector<tangent::contact::ContactEvent> events;
+  Snapshot snap;
+  TickResult r;
+  int64_t now = 1'000'000'000, seq = 0;
+  std::vector<double> times;
+  std::vector<int> histogram(static_cast<size_t>(so.max_iterations) + 1, 0);
+  double worst_violation = 0.0, worst_gap = 0.0;
+  int events_applied = 0;
+  for (int k = 0; k < steps; ++k) {
+    const double t = 1e-3 * k;
+    const double lift = 6e-3 * std::min(1.0, t / 2.0);
+    const double a = 2 * std::numbers::pi * std::max(0.0, t - 2.0) / 5.0;
+    DeviceSample s;
+    s.seq = ++seq;
+    s.utime = now / 1000;
+    s.received_ns = now;
+    s.position[0] = 4e-3 * std::sin(a);
+    s.position[1] = lift + 4e-3 * (std::cos(a) - 1.0);
+    for (int tick = 0; tick < 4; ++tick) {
+      const auto t0 = std::chrono::steady_clock::now();
+      servo.Tick(&s, now, &r);
+      const auto t1 = std::chrono::steady_clock::now();
+      times.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+      ++histogram[static_cast<size_t>(std::min(r.iterations, so.max_iterations))];
+      worst_violation = std::max(worst_violation, r.violation);
+      servo.FillSnapshot(&snap);
+      for (int c = 0; c < snap.num_contacts; ++c) {
+        if (snap.contacts[c].force > 0.0) worst_gap = std::max(worst_gap, snap.contacts[c].beta);
+      }
+      now += 250'000;
+    }
+    ServoLoop::ToGlobalInput(snap, &poses, &tracked);
+    stage.Run(poses, tracked, &events);
+    for (const tangent::contact::ContactEvent& e : events) {
+      ContactEventMsg m;
+      m.added = e.kind == tangent::contact::ContactEvent::Kind::kAdded;
+      m.surface_a = e.contact.a;
+      m.surface_b = e.contact.b;
+      for (int i = 0; i < 4; ++i) m.u[i] = e.contact.u[i];
+      events_applied += servo.Apply(m);
+    }
+  }
+  std::sort(times.begin(), times.end());
+  auto at = [&](double p) {
+    return times[std::min(times.size() - 1, static_cast<size_t>(p * times.size()))];
+  };
+  std::printf(
+      "servo_profile: %zu ticks, compute p50 %.1f us, p90 %.1f, p99 %.1f, p99.9 %.1f, max %.1f; "
+      "worst violation %.1e, loaded-contact gap %.1e, events applied %d\n",
+      times.size(), at(0.5), at(0.9), at(0.99), at(0.999), times.back(), worst_violation, worst_gap,
+      events_applied);
+  std::printf("iterations per tick:");
+  for (size_t i = 0; i < histogram.size(); ++i) {
+    if (histogram[i]) std::printf(" %zu: %d", i, histogram[i]);
+  }
+  std::printf(" (at the budget: %.2f %%)\n", 100.0 * histogram.back() / times.size());
+  return 0;
+}
