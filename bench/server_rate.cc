@@ -65,7 +65,7 @@ int main(int argc, char** argv) {
     s.received_ns = now;
     s.position[0] = 4e-3 * std::sin(a);
     s.position[1] = lift + 4e-3 * (std::cos(a) - 1.0);
-    engine.device().Write(s);
+    engine.Publish(s);
     while (engine.wrenches().Pop(&w)) {
       max_force = std::max(max_force, std::sqrt(w.force[0] * w.force[0] + w.force[1] * w.force[1] +
                                                 w.force[2] * w.force[2]));

@@ -1,9 +1,11 @@
 #include "server/engine.h"
 
+#include <linux/futex.h>
 #include <pthread.h>
 #include <sched.h>
 #include <sys/eventfd.h>
 #include <sys/prctl.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -34,6 +36,22 @@ void SleepUntil(int64_t t_ns) {
   ts.tv_nsec = static_cast<long>(t_ns % 1000000000LL);
   while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {
   }
+}
+
+// Sleeps until t_ns (CLOCK_MONOTONIC) unless *word no longer holds `expected` or is woken
+// (FUTEX_WAIT_BITSET takes an absolute CLOCK_MONOTONIC deadline; timer slack applies as for
+// clock_nanosleep). Not a lock: nothing is held, the sleep is only cut short.
+void SleepUntilOrWoken(std::atomic<uint32_t>* word, uint32_t expected, int64_t t_ns) {
+  timespec ts;
+  ts.tv_sec = static_cast<time_t>(t_ns / 1000000000LL);
+  ts.tv_nsec = static_cast<long>(t_ns % 1000000000LL);
+  syscall(SYS_futex, reinterpret_cast<uint32_t*>(word), FUTEX_WAIT_BITSET | FUTEX_PRIVATE_FLAG,
+          expected, &ts, nullptr, FUTEX_BITSET_MATCH_ANY);
+}
+
+void Wake(std::atomic<uint32_t>* word) {
+  syscall(SYS_futex, reinterpret_cast<uint32_t*>(word), FUTEX_WAKE | FUTEX_PRIVATE_FLAG, 1, nullptr,
+          nullptr, 0);
 }
 
 inline void CpuRelax() {
@@ -83,9 +101,25 @@ void Engine::Start() {
 
 void Engine::Stop() {
   if (!running_.exchange(false)) return;
+  doorbell_.fetch_add(1);  // a sleeping servo stops now, not at its next deadline
+  Wake(&doorbell_);
   if (servo_thread_.joinable()) servo_thread_.join();
   if (global_thread_.joinable()) global_thread_.join();
 }
+
+static_assert(sizeof(std::atomic<uint32_t>) == sizeof(uint32_t) &&
+                  std::atomic<uint32_t>::is_always_lock_free,
+              "the doorbell is used as a futex word");
+
+void Engine::Publish(const DeviceSample& s) {
+  device_.Write(s);
+  // Dekker pairing with the servo (sleeping = true; read the doorbell; check the device): either
+  // the servo sees the new ring, or this thread sees it sleeping and wakes it.
+  doorbell_.fetch_add(1);
+  if (servo_sleeping_.load()) Wake(&doorbell_);
+}
+
+void Engine::set_consumer_watching(bool watching) { consumer_watching_.store(watching); }
 
 void Engine::ServoThread() {
   // Timer slack 1 ns: the default 50 µs lets the kernel coalesce our wake-up that late.
@@ -105,9 +139,15 @@ void Engine::ServoThread() {
   while (running_.load(std::memory_order_relaxed)) {
     // Hybrid wait: sleep to just before the deadline, then spin; a device state arriving during
     // the spin is answered at once.
-    if (next - spin > MonotonicNs()) SleepUntil(next - spin);
     bool early = false;
-    while (MonotonicNs() < next) {
+    if (next - spin > MonotonicNs()) {
+      servo_sleeping_.store(true);
+      const uint32_t bell = doorbell_.load();
+      if (device_.version() == seen_version) SleepUntilOrWoken(&doorbell_, bell, next - spin);
+      servo_sleeping_.store(false, std::memory_order_relaxed);
+      early = device_.version() != seen_version;
+    }
+    while (!early && MonotonicNs() < next) {
       if (device_.version() != seen_version) {
         early = true;
         break;
@@ -136,9 +176,15 @@ void Engine::ServoThread() {
       was_fresh = fresh;
     }
     if (result.answered) {
+      result.wrench.tick_end_ns = MonotonicNs();
       if (!wrenches_.Push(result.wrench)) ++counters.wrenches_dropped;
-      const uint64_t one = 1;
-      [[maybe_unused]] const ssize_t w = write(wake_fd_, &one, sizeof(one));
+      // The eventfd only when the bridge is not watching the ring (Dekker pairing with
+      // set_consumer_watching(false) followed by a last look at the ring).
+      std::atomic_thread_fence(std::memory_order_seq_cst);
+      if (!consumer_watching_.load()) {
+        const uint64_t one = 1;
+        [[maybe_unused]] const ssize_t w = write(wake_fd_, &one, sizeof(one));
+      }
       counters.force_norm = std::sqrt(result.wrench.force[0] * result.wrench.force[0] +
                                       result.wrench.force[1] * result.wrench.force[1] +
                                       result.wrench.force[2] * result.wrench.force[2]);

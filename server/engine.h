@@ -18,7 +18,8 @@ namespace tangent::server {
 struct EngineOptions {
   double rate_hz = 4000.0;  ///< servo ticks per second
   /// Hybrid timing: sleep (timer slack 1 ns) until this long before each deadline, then spin.
-  /// A new device state arriving during the spin is answered at once (an extra tick).
+  /// A new device state is answered at once (an extra tick): during the spin the servo sees it,
+  /// during the sleep Publish wakes it (a futex wait with the sleep's deadline).
   double spin_us = 150.0;
   int servo_cpu = 0;   ///< core for the servo loop (−1: not pinned)
   int global_cpu = 1;  ///< core for the global contact stage (−1: not pinned)
@@ -78,8 +79,13 @@ class Engine {
   void Start();
   void Stop();
 
-  /// Bridge → servo: the latest accepted device state.
-  Seqlock<DeviceSample>& device() { return device_; }
+  /// Bridge → servo: the latest accepted device state. Publish() writes it and rings the
+  /// servo's doorbell: a servo sleeping before its deadline wakes at once and answers it.
+  const Seqlock<DeviceSample>& device() const { return device_; }
+  void Publish(const DeviceSample& s);
+  /// Set by a consumer that is watching wrenches() itself (the bridge waiting for an answer):
+  /// the servo then skips the eventfd write.
+  void set_consumer_watching(bool watching);
   /// Servo → bridge: wrenches answering device states.
   SpscRing<WrenchSample, 1024>& wrenches() { return wrenches_; }
   /// Servo → global stage and bridge.
@@ -108,6 +114,10 @@ class Engine {
   std::atomic<int64_t> global_passes_{0};
   std::atomic<int64_t> events_pushed_{0};
   std::atomic<bool> running_{false};
+  // The servo's doorbell (a futex word): rung by Publish, waited on while the servo sleeps.
+  alignas(64) std::atomic<uint32_t> doorbell_{0};
+  std::atomic<bool> servo_sleeping_{false};
+  std::atomic<bool> consumer_watching_{false};
   std::thread servo_thread_, global_thread_;
   int wake_fd_ = -1;
 };

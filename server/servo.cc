@@ -283,6 +283,8 @@ void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out
   w.utime = device->utime;
   w.seq = device->seq;
   w.server_utime = now_ns / 1000;
+  w.received_ns = device->received_ns;
+  w.tick_start_ns = now_ns;
   for (int i = 0; i < 3; ++i) {
     w.force[i] = force_[i];
     w.torque[i] = options_.dof == 6 ? torque_[i] : 0.0;

@@ -64,9 +64,11 @@ struct ContactEventMsg {
 struct WrenchSample {
   int64_t utime = 0, seq = 0;  ///< echo of the device sample answered
   int64_t server_utime = 0;
-  double force[3] = {0, 0, 0};   ///< N
-  double torque[3] = {0, 0, 0};  ///< N m
-  int8_t state = 0;              ///< 0 running, 1 ramping up, 2 timeout
+  int64_t received_ns = 0;  ///< the device sample's receipt (bridge), CLOCK_MONOTONIC
+  int64_t tick_start_ns = 0, tick_end_ns = 0;  ///< the answering tick (tick_end_ns: engine)
+  double force[3] = {0, 0, 0};                 ///< N
+  double torque[3] = {0, 0, 0};                ///< N m
+  int8_t state = 0;                            ///< 0 running, 1 ramping up, 2 timeout
 };
 
 struct ServoOptions {
