@@ -26,13 +26,16 @@ using namespace tangent::server;
 
 int main(int argc, char** argv) {
   double seconds = 60.0, rate = 4000.0;
+  bool spin_for_device = true;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--rate")) rate = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--spin-for-device")) spin_for_device = std::atoi(argv[i + 1]) != 0;
   }
   auto scene = LoadScene(std::string(TANGENT_SCENES_DIR) + "/paperclips.json");
   EngineOptions eo;
   eo.rate_hz = rate;
+  eo.spin_for_device = spin_for_device;
   Engine engine(scene.get(), eo);
   std::printf(
       "server_rate: paperclips, %d contacts at rest, servo %.0f Hz on core %d, global stage "
@@ -40,6 +43,8 @@ int main(int argc, char** argv) {
       engine.servo().active_contacts(), rate, eo.servo_cpu, eo.global_cpu, seconds);
   prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
   engine.Start();
+  // This thread stands for the LCM bridge: off the servo's core, as tangentd keeps it.
+  PinToCore(eo.global_cpu);
   const int64_t start = MonotonicNs();
   int64_t next = start, seq = 0;
   std::vector<double> jitter;

@@ -78,15 +78,18 @@ int main(int argc, char** argv) {
       events_applied += servo.Apply(m);
     }
   }
+  double total = 0.0;
+  for (double t : times) total += t;
   std::sort(times.begin(), times.end());
   auto at = [&](double p) {
     return times[std::min(times.size() - 1, static_cast<size_t>(p * times.size()))];
   };
   std::printf(
-      "servo_profile: %zu ticks, compute p50 %.1f us, p90 %.1f, p99 %.1f, p99.9 %.1f, max %.1f; "
+      "servo_profile: %zu ticks, compute mean %.2f us, p50 %.1f, p90 %.1f, p99 %.1f, p99.9 %.1f, "
+      "max %.1f; "
       "worst violation %.1e, loaded-contact gap %.1e, events applied %d\n",
-      times.size(), at(0.5), at(0.9), at(0.99), at(0.999), times.back(), worst_violation, worst_gap,
-      events_applied);
+      times.size(), total / static_cast<double>(times.size()), at(0.5), at(0.9), at(0.99),
+      at(0.999), times.back(), worst_violation, worst_gap, events_applied);
   std::printf("iterations per tick:");
   for (size_t i = 0; i < histogram.size(); ++i) {
     if (histogram[i]) std::printf(" %zu: %d", i, histogram[i]);

@@ -153,7 +153,8 @@ Eigen::Vector2d Hi(const nurbs::NurbsSurface& s) {
 SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                                            const nurbs::NurbsSurface& g, const BodyPose& pose_g,
                                            const Eigen::Vector4d& seed,
-                                           const ExtremalOptions& options) {
+                                           const ExtremalOptions& options,
+                                           SurfacePairEval* at_solution) {
   nurbs::SpanHint hf, hg;
   SurfacePairEval e;
   auto eval = [&](const Eigen::Vector4d& x, internal::NewtonSystem<4>* s) {
@@ -169,7 +170,8 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   auto opt = Convert<4>(options);
   opt.periodic = {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()};
   const auto r = internal::BoxNewton<4>(eval, seed, lo, hi, opt);
-  EvaluatePair(f, pose_f, g, pose_g, r.x, &hf, &hg, &e);
+  // BoxNewton's last evaluation is at r.x (it only ever moves to a point it has just evaluated):
+  // e is the pair there.
   SurfaceSurfaceExtremum out;
   out.u = r.x;
   out.p_f = e.f.world.S;
@@ -185,12 +187,14 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   out.at_bound = r.active;
   out.iterations = r.iterations;
   out.rcond = r.rcond;
+  if (at_solution) *at_solution = e;
   return out;
 }
 
 PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::NurbsSurface& f,
                                        const BodyPose& pose_f, const Eigen::Vector2d& seed,
-                                       const ExtremalOptions& options) {
+                                       const ExtremalOptions& options,
+                                       PlacedSurfacePoint* at_solution) {
   nurbs::SpanHint hf;
   PlacedSurfacePoint p;
   auto eval = [&](const Eigen::Vector2d& x, internal::NewtonSystem<2>* s) {
@@ -206,9 +210,13 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
   };
   auto opt = Convert<2>(options);
   opt.periodic = {f.periodic_u(), f.periodic_v()};
-  const auto r = internal::BoxNewton<2>(eval, seed, Lo(f), Hi(f), opt);
   internal::NewtonSystem<2> s;
-  eval(r.x, &s);
+  const auto r = internal::BoxNewton<2>(
+      [&](const Eigen::Vector2d& x, internal::NewtonSystem<2>* sys) {
+        eval(x, sys);
+        s = *sys;  // the last evaluation is at r.x (see SolveSurfaceSurface)
+      },
+      seed, Lo(f), Hi(f), opt);
   PointSurfaceExtremum out;
   out.u = r.x;
   out.p_f = p.world.S;
@@ -218,6 +226,7 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
   out.kind = internal::Classify<2>(s.hess, r.active, s.scale);
   out.at_bound = r.active;
   out.iterations = r.iterations;
+  if (at_solution) *at_solution = p;
   return out;
 }
 

@@ -77,10 +77,13 @@ Eigen::Vector4d ClosestSamplePair(const nurbs::NurbsSurface& f, const BodyPose& 
 
 /// Extremal distance between surface f on body F and surface g on body G from a seed (u,v,s,t)
 /// (clamped into the domains). Never returns parameters outside the domains. Allocation free.
+/// `at_solution` (optional) receives the pair's evaluation at the returned parameters (the
+/// solver's last one: a caller needing the surfaces there need not evaluate them again).
 SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                                            const nurbs::NurbsSurface& g, const BodyPose& pose_g,
                                            const Eigen::Vector4d& seed,
-                                           const ExtremalOptions& options = {});
+                                           const ExtremalOptions& options = {},
+                                           SurfacePairEval* at_solution = nullptr);
 
 /// Extremal distance between a world point x and surface f on a body: d = f − x,
 /// equations [d·f_u, d·f_v] (regular at d = 0, where the Jacobian is the first fundamental form).
@@ -94,9 +97,11 @@ struct PointSurfaceExtremum {
   std::array<bool, 2> at_bound{};
   int iterations = 0;
 };
+/// `at_solution` as for SolveSurfaceSurface.
 PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::NurbsSurface& f,
                                        const BodyPose& pose_f, const Eigen::Vector2d& seed,
-                                       const ExtremalOptions& options = {});
+                                       const ExtremalOptions& options = {},
+                                       PlacedSurfacePoint* at_solution = nullptr);
 
 /// Curve g(τ) on body G against surface f on body F: unknowns (u, v, τ), d = g − f, equations
 /// [d·f_u, d·f_v, N_f·g'] (regular at contact, as for surface pairs).

@@ -49,11 +49,10 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses) const {
   const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
   const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
   if (valid_ && SamePose(pf.q, q_f_) && SamePose(pg.q, q_g_)) return;
-  ext_ = contact::SolveSurfaceSurface(*f_, pf, *g_, pg, u_);
+  ext_ = contact::SolveSurfaceSurface(*f_, pf, *g_, pg, u_, {}, &eval_);
   u_ = ext_.u;
   q_f_ = pf.q;
   q_g_ = pg.q;
-  contact::EvaluatePair(*f_, pf, *g_, pg, u_, &hint_f_, &hint_g_, &eval_, false);
   valid_ = true;
 }
 
@@ -132,11 +131,10 @@ void PointOnSurfaceTerm::Update(const std::vector<BodyPose>& poses) const {
   const BodyPose& pa = poses[static_cast<size_t>(point_.body)];
   const BodyPose& ps = poses[static_cast<size_t>(body_s_)];
   if (valid_ && SamePose(pa.q, q_a_) && SamePose(ps.q, q_s_)) return;
-  ext_ = contact::SolvePointSurface(pa.Point(point_.point), *s_, ps, u_);
+  ext_ = contact::SolvePointSurface(pa.Point(point_.point), *s_, ps, u_, {}, &eval_);
   u_ = ext_.u;
   q_a_ = pa.q;
   q_s_ = ps.q;
-  contact::EvaluatePlaced(*s_, ps, u_[0], u_[1], &hint_, &eval_);
   valid_ = true;
 }
 

@@ -68,7 +68,6 @@ class SurfaceContactTerm final : public Term {
   mutable bool valid_ = false;
   mutable contact::SurfaceSurfaceExtremum ext_;
   mutable contact::SurfacePairEval eval_;
-  mutable nurbs::SpanHint hint_f_, hint_g_;
 };
 
 /// The signed distance from a point on body a (attachment point) to a surface on body b at the
@@ -102,7 +101,6 @@ class PointOnSurfaceTerm final : public Term {
   mutable bool valid_ = false;
   mutable contact::PointSurfaceExtremum ext_;
   mutable contact::PlacedSurfacePoint eval_;
-  mutable nurbs::SpanHint hint_;
 };
 
 std::shared_ptr<SurfaceContactTerm> MakeSurfaceContact(int body_f, const nurbs::NurbsSurface* f,

@@ -136,14 +136,27 @@ void Engine::ServoThread() {
   Snapshot snap;
   ContactEventMsg event;
   int64_t next = MonotonicNs() + period;
+  // The device's own rhythm (a 1 kHz stream arrives every millisecond give or take the
+  // machine's jitter): the servo also spins from device_lead before the next expected arrival
+  // to device_lag after it, so a state is seen at once instead of through a futex wake-up
+  // (measured: answer_wait p50 25 µs through the doorbell).
+  const int64_t device_lead = static_cast<int64_t>(options_.device_lead_us * 1e3);
+  const int64_t device_lag = static_cast<int64_t>(options_.device_lag_us * 1e3);
+  int64_t last_arrival = 0, device_period = 0;
   while (running_.load(std::memory_order_relaxed)) {
-    // Hybrid wait: sleep to just before the deadline, then spin; a device state arriving during
-    // the spin is answered at once.
+    // Hybrid wait: sleep to just before the deadline (or the device's next state), then spin; a
+    // device state arriving meanwhile is answered at once.
     bool early = false;
-    if (next - spin > MonotonicNs()) {
+    int64_t wake = next - spin;
+    if (options_.spin_for_device && device_period > 0) {
+      const int64_t expected = last_arrival + device_period;
+      const int64_t now = MonotonicNs();
+      if (now < expected + device_lag) wake = std::min(wake, expected - device_lead);
+    }
+    if (wake > MonotonicNs()) {
       servo_sleeping_.store(true);
       const uint32_t bell = doorbell_.load();
-      if (device_.version() == seen_version) SleepUntilOrWoken(&doorbell_, bell, next - spin);
+      if (device_.version() == seen_version) SleepUntilOrWoken(&doorbell_, bell, wake);
       servo_sleeping_.store(false, std::memory_order_relaxed);
       early = device_.version() != seen_version;
     }
@@ -164,7 +177,18 @@ void Engine::ServoThread() {
         ++counters.events_dropped;
       }
     }
+    const int64_t previous_arrival = have_sample ? sample.received_ns : 0;
     const unsigned v = device_.Read(&sample);
+    if (v != 0 && v != seen_version) {
+      // The device's period: a running estimate of the gaps (a pause or a first state resets).
+      const int64_t gap = sample.received_ns - previous_arrival;
+      if (previous_arrival > 0 && gap > 0 && gap < 20'000'000) {
+        device_period = device_period > 0 ? (7 * device_period + gap) / 8 : gap;
+      } else {
+        device_period = 0;
+      }
+      last_arrival = sample.received_ns;
+    }
     if (v != 0) {
       have_sample = true;
       seen_version = v;

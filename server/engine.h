@@ -21,6 +21,11 @@ struct EngineOptions {
   /// A new device state is answered at once (an extra tick): during the spin the servo sees it,
   /// during the sleep Publish wakes it (a futex wait with the sleep's deadline).
   double spin_us = 150.0;
+  /// Spin also from this long before the device's next expected state (its period estimated
+  /// from arrivals) until device_lag_us after it, so the state is seen without a wake-up.
+  bool spin_for_device = true;
+  double device_lead_us = 100.0;
+  double device_lag_us = 200.0;
   int servo_cpu = 0;   ///< core for the servo loop (−1: not pinned)
   int global_cpu = 1;  ///< core for the global contact stage (−1: not pinned)
   double global_rate_hz = 1000.0;

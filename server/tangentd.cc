@@ -76,6 +76,8 @@ int main(int argc, char** argv) {
         url.c_str());
     std::fflush(stdout);
     engine.Start();
+    // The bridge (this thread) keeps off the servo's core: it shares the global stage's.
+    PinToCore(eo.global_cpu);
     bridge.Run(g_stop, duration);
     engine.Stop();
     std::printf("tangentd summary:\n%s", bridge.Report().c_str());
