@@ -27,6 +27,7 @@ using namespace tangent::server;
 int main(int argc, char** argv) {
   double seconds = 60.0, rate = 4000.0;
   bool spin_for_device = true;
+  const bool verbose = std::getenv("TANGENT_VERBOSE") != nullptr;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--rate")) rate = std::atof(argv[i + 1]);
@@ -74,6 +75,22 @@ int main(int argc, char** argv) {
     while (engine.wrenches().Pop(&w)) {
       max_force = std::max(max_force, std::sqrt(w.force[0] * w.force[0] + w.force[1] * w.force[1] +
                                                 w.force[2] * w.force[2]));
+    }
+    JournalEntry j;
+    while (engine.journal().Pop(&j)) {
+      if (!verbose) continue;
+      const double at = 1e-9 * static_cast<double>(j.time_ns - start);
+      if (j.kind == JournalEntry::kViolation) {
+        std::printf(
+            "  %.4f s tick %lld: violation %.1e after %d iterations, %d contacts, lowest "
+            "beta %.1e m\n",
+            at, static_cast<long long>(j.tick), j.violation, j.iterations, j.contacts, j.min_beta);
+      } else {
+        std::printf("  %.4f s tick %lld: %s %s %d-%d at (%.4f %.4f %.4f %.4f)\n", at,
+                    static_cast<long long>(j.tick), j.added ? "add" : "remove",
+                    j.kind == JournalEntry::kEventApplied ? "applied" : "dropped", j.surface_a,
+                    j.surface_b, j.u[0], j.u[1], j.u[2], j.u[3]);
+      }
     }
     engine.counters().Read(&c);
     max_violation = std::max(max_violation, c.max_violation);

@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -23,12 +24,13 @@
 using namespace tangent::server;
 
 int main(int argc, char** argv) {
-  int steps = 8000;
+  int steps = 8000, lag = 0;
   ServoOptions so;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--steps")) steps = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--iterations")) so.max_iterations = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--kkt")) so.kkt_tolerance = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--lag")) lag = std::atoi(argv[i + 1]);
   }
   auto scene = LoadScene(std::string(TANGENT_SCENES_DIR) + "/paperclips.json");
   ServoLoop servo(scene.get(), so);
@@ -44,6 +46,8 @@ int main(int argc, char** argv) {
   std::vector<int> histogram(static_cast<size_t>(so.max_iterations) + 1, 0);
   double worst_violation = 0.0, worst_gap = 0.0;
   int events_applied = 0;
+  std::deque<std::pair<int, ContactEventMsg>> pending;
+  const bool verbose = std::getenv("TANGENT_VERBOSE") != nullptr;
   for (int k = 0; k < steps; ++k) {
     const double t = 1e-3 * k;
     const double lift = 6e-3 * std::min(1.0, t / 2.0);
@@ -61,12 +65,25 @@ int main(int argc, char** argv) {
       times.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
       ++histogram[static_cast<size_t>(std::min(r.iterations, so.max_iterations))];
       worst_violation = std::max(worst_violation, r.violation);
+      if (verbose && r.violation > 1e-6) {
+        std::printf("step %d tick %d: violation %.1e, %d iterations, %d contacts\n", k, tick,
+                    r.violation, r.iterations, r.num_contacts);
+      }
       servo.FillSnapshot(&snap);
       for (int c = 0; c < snap.num_contacts; ++c) {
         if (snap.contacts[c].force > 0.0) worst_gap = std::max(worst_gap, snap.contacts[c].beta);
+        if (verbose && snap.contacts[c].force > 0.0 && snap.contacts[c].beta > 1e-8) {
+          std::printf(
+              "step %d tick %d: contact %d-%d carries %.2e N at a gap of %.1e m (%d iterations, "
+              "kkt %.1e)\n",
+              k, tick, snap.contacts[c].surface_a, snap.contacts[c].surface_b,
+              snap.contacts[c].force, snap.contacts[c].beta, r.iterations, r.kkt);
+        }
       }
       now += 250'000;
     }
+    // The global pass on this snapshot; its events reach the servo `lag` device steps later
+    // (the threaded server's pass runs beside the servo and lags it by up to a millisecond).
     ServoLoop::ToGlobalInput(snap, &poses, &tracked);
     stage.Run(poses, tracked, &events);
     for (const tangent::contact::ContactEvent& e : events) {
@@ -75,7 +92,17 @@ int main(int argc, char** argv) {
       m.surface_a = e.contact.a;
       m.surface_b = e.contact.b;
       for (int i = 0; i < 4; ++i) m.u[i] = e.contact.u[i];
+      pending.push_back({k + lag, m});
+    }
+    while (!pending.empty() && pending.front().first <= k) {
+      const ContactEventMsg& m = pending.front().second;
       events_applied += servo.Apply(m);
+      if (verbose) {
+        std::printf("step %d: event %s %d-%d u %.4f %.4f %.4f %.4f\n", k,
+                    m.added ? "add" : "remove", m.surface_a, m.surface_b, m.u[0], m.u[1], m.u[2],
+                    m.u[3]);
+      }
+      pending.pop_front();
     }
   }
   double total = 0.0;

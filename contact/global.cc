@@ -532,7 +532,9 @@ void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
     const SurfaceSurfaceExtremum e =
         SolveSurfaceSurface(*wa.s.surface, poses[static_cast<size_t>(wa.s.body)], *wb.s.surface,
                             poses[static_cast<size_t>(wb.s.body)], c.u);
-    GlobalContact now{c.a, c.b, e.u, e.beta, e.p_f, e.p_g};
+    // A removal names the contact by the parameters it is tracked at (what the owner of the
+    // contact matches it by), with the distance and points re-solved now.
+    GlobalContact now{c.a, c.b, c.u, e.beta, e.p_f, e.p_g};
     if (e.status == ExtremalStatus::kAtBoundary) {
       events->push_back({ContactEvent::Kind::kRemoved, ContactEvent::Reason::kLeftDomain, now});
     } else if (e.status != ExtremalStatus::kConverged) {

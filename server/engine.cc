@@ -171,11 +171,21 @@ void Engine::ServoThread() {
     if (!early && start > next + period) ++counters.overruns;
     // Contact events from the global stage.
     while (events_.Pop(&event)) {
-      if (servo_->Apply(event)) {
+      const bool applied = servo_->Apply(event);
+      if (applied) {
         ++counters.events_applied;
       } else {
         ++counters.events_dropped;
       }
+      JournalEntry j;
+      j.tick = counters.ticks;
+      j.time_ns = start;
+      j.kind = applied ? JournalEntry::kEventApplied : JournalEntry::kEventDropped;
+      j.added = event.added;
+      j.surface_a = event.surface_a;
+      j.surface_b = event.surface_b;
+      for (int i = 0; i < 4; ++i) j.u[i] = event.u[i];
+      journal_.Push(j);
     }
     const int64_t previous_arrival = have_sample ? sample.received_ns : 0;
     const unsigned v = device_.Read(&sample);
@@ -212,6 +222,21 @@ void Engine::ServoThread() {
       counters.force_norm = std::sqrt(result.wrench.force[0] * result.wrench.force[0] +
                                       result.wrench.force[1] * result.wrench.force[1] +
                                       result.wrench.force[2] * result.wrench.force[2]);
+    }
+    if (result.violation > options_.journal_violation) {
+      servo_->FillSnapshot(&snap);
+      JournalEntry j;
+      j.tick = counters.ticks;
+      j.time_ns = start;
+      j.kind = JournalEntry::kViolation;
+      j.violation = result.violation;
+      j.iterations = result.iterations;
+      j.contacts = snap.num_contacts;
+      j.min_beta = 0.0;
+      for (int k = 0; k < snap.num_contacts; ++k) {
+        j.min_beta = std::min(j.min_beta, snap.contacts[k].beta);
+      }
+      journal_.Push(j);
     }
     ++counters.ticks;
     counters.early_ticks += early;

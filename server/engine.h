@@ -29,6 +29,7 @@ struct EngineOptions {
   int servo_cpu = 0;   ///< core for the servo loop (−1: not pinned)
   int global_cpu = 1;  ///< core for the global contact stage (−1: not pinned)
   double global_rate_hz = 1000.0;
+  double journal_violation = 1e-6;  ///< a tick's violation above this is journalled
   ServoOptions servo;
 };
 
@@ -74,6 +75,21 @@ struct LoopCounters {
   int64_t wrenches_dropped = 0;
 };
 
+/// A line of the servo's journal (plain data, SPSC ring to whoever reads it: tangentd's log,
+/// the rate benchmark): contact events as applied, and ticks whose solve left a violation above
+/// EngineOptions::journal_violation.
+struct JournalEntry {
+  enum Kind : int32_t { kEventApplied = 0, kEventDropped = 1, kViolation = 2 };
+  int64_t tick = 0;
+  int64_t time_ns = 0;
+  int32_t kind = kEventApplied;
+  int32_t added = 0, surface_a = 0, surface_b = 0;  ///< events
+  double u[4] = {0, 0, 0, 0};
+  double violation = 0.0;  ///< kViolation: the tick's; min_beta: the lowest tracked β (m)
+  double min_beta = 0.0;
+  int32_t iterations = 0, contacts = 0;
+};
+
 class Engine {
  public:
   Engine(Scene* scene, const EngineOptions& options);
@@ -93,6 +109,8 @@ class Engine {
   void set_consumer_watching(bool watching);
   /// Servo → bridge: wrenches answering device states.
   SpscRing<WrenchSample, 1024>& wrenches() { return wrenches_; }
+  /// Servo → one reader: contact events applied and violation excursions (full: dropped).
+  SpscRing<JournalEntry, 256>& journal() { return journal_; }
   /// Servo → global stage and bridge.
   const Seqlock<Snapshot>& snapshot() const { return snapshot_; }
   const Seqlock<LoopCounters>& counters() const { return counters_; }
@@ -115,6 +133,7 @@ class Engine {
   SpscRing<ContactEventMsg, 256> events_;
   Seqlock<Snapshot> snapshot_;
   Seqlock<LoopCounters> counters_;
+  SpscRing<JournalEntry, 256> journal_;
   DurationHistogram compute_, global_;
   std::atomic<int64_t> global_passes_{0};
   std::atomic<int64_t> events_pushed_{0};

@@ -180,8 +180,11 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
     }
   }
   if (!e.added) {
-    if (nearest) nearest->term->Deactivate();
-    return nearest != nullptr;
+    // Only the contact the event names: a slot elsewhere on the pair is another contact (the
+    // named one may be gone already, e.g. freed by an earlier event).
+    if (!nearest || nearest_d > 0.05) return false;
+    nearest->term->Deactivate();
+    return true;
   }
   if (nearest && nearest_d < 0.03) return true;  // already tracked (the event raced a snapshot)
   if (!free) return false;

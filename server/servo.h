@@ -105,8 +105,10 @@ class ServoLoop {
   /// One tick (allocation free). `device`: the latest accepted sample (nullptr: none yet);
   /// `now_ns`: CLOCK_MONOTONIC.
   void Tick(const DeviceSample* device, int64_t now_ns, TickResult* out);
-  /// Applies a global-stage event: activates a free slot of the pair / frees the slot nearest
-  /// to the event's parameters. @return false when no slot was free (counted by the caller).
+  /// Applies a global-stage event: activates a free slot of the pair / frees the active slot
+  /// tracking the event's parameters (within 5 % of each parameter's domain). @return false
+  /// when no slot was free, or no active slot tracks the removed contact (counted by the
+  /// caller).
   bool Apply(const ContactEventMsg& e);
   void FillSnapshot(Snapshot* s) const;
 

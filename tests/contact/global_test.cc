@@ -269,9 +269,12 @@ TEST(GlobalTest, GrazingHysteresisAndDeepInterpenetrationEvents) {
   // Beyond release: both removed as separated.
   e = run(0.25 * mm, tracked);
   ASSERT_EQ(e.size(), 2u);
-  for (const ContactEvent& ev : e) {
-    EXPECT_EQ(ev.kind, ContactEvent::Kind::kRemoved);
-    EXPECT_EQ(ev.reason, ContactEvent::Reason::kSeparated);
+  for (size_t i = 0; i < e.size(); ++i) {
+    EXPECT_EQ(e[i].kind, ContactEvent::Kind::kRemoved);
+    EXPECT_EQ(e[i].reason, ContactEvent::Reason::kSeparated);
+    // Named by the parameters it is tracked at (its owner matches it by them), distance now.
+    EXPECT_EQ(e[i].contact.u, tracked[i].u);
+    EXPECT_NEAR(e[i].contact.beta, 0.25 * mm, 1e-9);
   }
   // Deep interpenetration (centre lines 0.5 mm apart, β = −0.4 mm, the wires overlapping by
   // almost half their diameter): found and added; the far sides' pairs (β ≈ −1.3 mm) are not.

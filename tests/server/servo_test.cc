@@ -113,6 +113,28 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
   for (int k = 0; k < snap.num_contacts; ++k) EXPECT_GE(snap.contacts[k].beta, -1e-6);
 }
 
+TEST(ServoTest, ARemovalFreesOnlyTheContactItNames) {
+  auto scene = Load("paperclips");
+  ServoLoop servo(scene.get(), ServoOptions{});
+  ASSERT_EQ(servo.active_contacts(), 2);
+  Snapshot snap;
+  servo.FillSnapshot(&snap);
+  const TrackedContact held = snap.contacts[0];
+  ContactEventMsg m;
+  m.added = 0;
+  m.surface_a = held.surface_a;
+  m.surface_b = held.surface_b;
+  // Parameters a quarter of the domain away: another contact, already gone. Refused.
+  for (int i = 0; i < 4; ++i) m.u[i] = held.u[i];
+  m.u[2] = m.u[2] > 0.5 ? m.u[2] - 0.25 : m.u[2] + 0.25;
+  EXPECT_FALSE(servo.Apply(m));
+  EXPECT_EQ(servo.active_contacts(), 2);
+  // Its own parameters (moved a little since the global stage saw them): freed.
+  for (int i = 0; i < 4; ++i) m.u[i] = held.u[i] + 1e-3;
+  EXPECT_TRUE(servo.Apply(m));
+  EXPECT_EQ(servo.active_contacts(), 1);
+}
+
 TEST(ServoTest, DeviceTimeoutRampsTheForceToZeroAndHoldsTheScene) {
   auto scene = Load("paperclips");
   ServoLoop servo(scene.get(), ServoOptions{});
