@@ -42,6 +42,8 @@ status=$?
 server=
 cat "$work/phantom.out"
 grep -v "^load:" "$work/server.out"
+echo "servo journal (tangentd --log): $(grep -c ": contact " "$work/tangentd.log") contact events, $(grep -c ": violation " "$work/tangentd.log") ticks above 1e-6 violation"
+grep ": violation " "$work/tangentd.log" | head -5 || true
 
 value() { grep -m1 "^$2=" "$work/$1.out" | cut -d= -f2; }
 fail() { echo "FAIL: $*"; exit 1; }
