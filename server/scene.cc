@@ -223,6 +223,8 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
     root.At("length_unit").Fail("must be \"m\", \"cm\" or \"mm\", got \"" + unit_name + "\"");
   }
 
+  s.least_astonishment = root.Positive("least_astonishment", s.least_astonishment);
+
   // Bodies.
   const Node bodies = root.At("bodies");
   if (bodies.Size() == 0) bodies.Fail("a scene needs at least one body");

@@ -90,6 +90,9 @@ struct Scene {
   std::vector<ObjectiveSpec> objectives;
   GraspSpec grasp;
   DeviceSpec device;
+  /// Weight of least astonishment (the kinetic-energy metric's step penalty) relative to the
+  /// grasp, whose weight is 1 (docs/server.md, "Least astonishment").
+  double least_astonishment = 1e-3;
   double offset_tolerance = 20e-6;  ///< tessellation bound of offset meshes, m
   double offset_margin = 0.25e-3;   ///< m
   /// Longest grid-cell chord of the offset meshes, m: small blocks let the global stage skip the

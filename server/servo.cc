@@ -41,6 +41,7 @@ ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene),
   }
   problem_ = std::make_unique<optimizer::Problem>(scene->mechanism);
   optimizer::Problem& p = *problem_;
+  p.set_least_astonishment(scene->least_astonishment);
   for (const JointSpec& j : scene->joints) {
     p.AddEquality(j.term);
     if (j.limits) p.AddInequality(j.limits);

@@ -60,6 +60,9 @@ TEST(SceneTest, BadScenesNameTheProblem) {
   EXPECT_NE(Error(Scene(R"({"name": "b", "mass": -2})", grasp))
                 .find("bodies[0].mass: must be positive, got -2"),
             std::string::npos);
+  EXPECT_NE(Error(Scene(kBody, grasp + R"(, "least_astonishment": 0)"))
+                .find("least_astonishment: must be positive, got 0"),
+            std::string::npos);
   EXPECT_NE(Error(Scene(std::string(kBody) + "," + kBody, grasp))
                 .find("bodies[1].name: duplicate body name \"b\""),
             std::string::npos);
