@@ -99,7 +99,7 @@ struct Bridge::Impl {
   void PublishWrenches() {
     WrenchSample w;
     while (engine->wrenches().Pop(&w)) {
-      if (w.seq == awaited_seq) awaiting = false;
+      if (w.seq >= awaited_seq) awaiting = false;
       wrench.utime = w.utime;
       wrench.seq = w.seq;
       wrench.server_utime = w.server_utime;
