@@ -15,10 +15,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <numbers>
 #include <string>
 #include <vector>
 
+#include "bench/drag_path.h"
 #include "server/engine.h"
 #include "server/scene.h"
 
@@ -62,15 +62,12 @@ int main(int argc, char** argv) {
     jitter.push_back(1e-3 * static_cast<double>(now - next));
     const double t = 1e-9 * static_cast<double>(now - start);
     if (t > seconds) break;
-    // The drag: lift 6 mm over 2 s, then 4 mm circles, 5 s per turn.
-    const double lift = 6e-3 * std::min(1.0, t / 2.0);
-    const double a = 2 * std::numbers::pi * std::max(0.0, t - 2.0) / 5.0;
     DeviceSample s;
     s.seq = ++seq;
     s.utime = now / 1000;
     s.received_ns = now;
-    s.position[0] = 4e-3 * std::sin(a);
-    s.position[1] = lift + 4e-3 * (std::cos(a) - 1.0);
+    const Eigen::Vector3d hand = tangent::bench::DragPath(t);
+    for (int i = 0; i < 3; ++i) s.position[i] = hand[i];
     engine.Publish(s);
     while (engine.wrenches().Pop(&w)) {
       max_force = std::max(max_force, std::sqrt(w.force[0] * w.force[0] + w.force[1] * w.force[1] +

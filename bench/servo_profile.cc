@@ -1,5 +1,5 @@
 // The servo tick's compute on one thread, without scheduling noise (issue 6): the paperclip
-// scene dragged along the phantom's "drag" path (lift 6 mm over 2 s, then 4 mm circles), a device
+// scene dragged along bench/drag_path.h (lift 6 mm over 2 s, then 4 mm circles), a device
 // state every millisecond, four ticks per state, one global pass after every four ticks, its
 // events applied between ticks. Reports the tick time distribution, the solver's iteration
 // histogram, ticks at the iteration budget, the worst violation and complementarity (the largest
@@ -15,10 +15,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <deque>
-#include <numbers>
 #include <string>
 #include <vector>
 
+#include "bench/drag_path.h"
 #include "server/servo.h"
 
 using namespace tangent::server;
@@ -50,14 +50,12 @@ int main(int argc, char** argv) {
   const bool verbose = std::getenv("TANGENT_VERBOSE") != nullptr;
   for (int k = 0; k < steps; ++k) {
     const double t = 1e-3 * k;
-    const double lift = 6e-3 * std::min(1.0, t / 2.0);
-    const double a = 2 * std::numbers::pi * std::max(0.0, t - 2.0) / 5.0;
     DeviceSample s;
     s.seq = ++seq;
     s.utime = now / 1000;
     s.received_ns = now;
-    s.position[0] = 4e-3 * std::sin(a);
-    s.position[1] = lift + 4e-3 * (std::cos(a) - 1.0);
+    const Eigen::Vector3d hand = tangent::bench::DragPath(t);
+    for (int i = 0; i < 3; ++i) s.position[i] = hand[i];
     for (int tick = 0; tick < 4; ++tick) {
       const auto t0 = std::chrono::steady_clock::now();
       servo.Tick(&s, now, &r);

@@ -13,6 +13,7 @@
 
 #include <Eigen/Geometry>
 
+#include "bench/drag_path.h"
 #include "tests/support/alloc_counter.h"
 
 namespace tangent::server {
@@ -62,9 +63,7 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
   int64_t seq = 1000;
   for (int k = 0; k < 6000; ++k) {
     const double t = 1e-3 * k;
-    const double lift = 6 * mm * std::min(1.0, t / 2.0);
-    const double a = 2 * std::numbers::pi * std::max(0.0, t - 2.0) / 5.0;
-    const Eigen::Vector3d hand(4 * mm * std::sin(a), lift + 4 * mm * (std::cos(a) - 1.0), 0);
+    const Eigen::Vector3d hand = bench::DragPath(t);
     const DeviceSample s = Sample(++seq, hand, now);
     for (int tick = 0; tick < 4; ++tick) {
       const long before = tangent::testing::AllocationCount();
