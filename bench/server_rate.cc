@@ -62,32 +62,17 @@ int main(int argc, char** argv) {
     jitter.push_back(1e-3 * static_cast<double>(now - next));
     const double t = 1e-9 * static_cast<double>(now - start);
     if (t > seconds) break;
-    DeviceSample s;
-    s.seq = ++seq;
-    s.utime = now / 1000;
-    s.received_ns = now;
-    const Eigen::Vector3d hand = tangent::bench::DragPath(t);
-    for (int i = 0; i < 3; ++i) s.position[i] = hand[i];
-    engine.Publish(s);
+    engine.Publish(tangent::bench::DragSample(++seq, t, now));
     while (engine.wrenches().Pop(&w)) {
       max_force = std::max(max_force, std::sqrt(w.force[0] * w.force[0] + w.force[1] * w.force[1] +
                                                 w.force[2] * w.force[2]));
     }
     JournalEntry j;
+    char line[200];
     while (engine.journal().Pop(&j)) {
       if (!verbose) continue;
-      const double at = 1e-9 * static_cast<double>(j.time_ns - start);
-      if (j.kind == JournalEntry::kViolation) {
-        std::printf(
-            "  %.4f s tick %lld: violation %.1e after %d iterations, %d contacts, lowest "
-            "beta %.1e m\n",
-            at, static_cast<long long>(j.tick), j.violation, j.iterations, j.contacts, j.min_beta);
-      } else {
-        std::printf("  %.4f s tick %lld: %s %s %d-%d at (%.4f %.4f %.4f %.4f)\n", at,
-                    static_cast<long long>(j.tick), j.added ? "add" : "remove",
-                    j.kind == JournalEntry::kEventApplied ? "applied" : "dropped", j.surface_a,
-                    j.surface_b, j.u[0], j.u[1], j.u[2], j.u[3]);
-      }
+      FormatJournalEntry(j, start, line, sizeof(line));
+      std::printf("  %s\n", line);
     }
     engine.counters().Read(&c);
     max_violation = std::max(max_violation, c.max_violation);

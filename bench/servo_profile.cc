@@ -50,12 +50,7 @@ int main(int argc, char** argv) {
   const bool verbose = std::getenv("TANGENT_VERBOSE") != nullptr;
   for (int k = 0; k < steps; ++k) {
     const double t = 1e-3 * k;
-    DeviceSample s;
-    s.seq = ++seq;
-    s.utime = now / 1000;
-    s.received_ns = now;
-    const Eigen::Vector3d hand = tangent::bench::DragPath(t);
-    for (int i = 0; i < 3; ++i) s.position[i] = hand[i];
+    const DeviceSample s = tangent::bench::DragSample(++seq, t, now);
     for (int tick = 0; tick < 4; ++tick) {
       const auto t0 = std::chrono::steady_clock::now();
       servo.Tick(&s, now, &r);
@@ -85,12 +80,7 @@ int main(int argc, char** argv) {
     ServoLoop::ToGlobalInput(snap, &poses, &tracked);
     stage.Run(poses, tracked, &events);
     for (const tangent::contact::ContactEvent& e : events) {
-      ContactEventMsg m;
-      m.added = e.kind == tangent::contact::ContactEvent::Kind::kAdded;
-      m.surface_a = e.contact.a;
-      m.surface_b = e.contact.b;
-      for (int i = 0; i < 4; ++i) m.u[i] = e.contact.u[i];
-      pending.push_back({k + lag, m});
+      pending.push_back({k + lag, ServoLoop::ToEventMsg(e)});
     }
     while (!pending.empty() && pending.front().first <= k) {
       const ContactEventMsg& m = pending.front().second;

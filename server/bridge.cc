@@ -157,22 +157,11 @@ struct Bridge::Impl {
   /// The servo's journal into the log file (contact events, violation excursions).
   void DrainJournal() {
     JournalEntry j;
+    char line[200];
     while (engine->journal().Pop(&j)) {
       if (!log) continue;
-      const double t = 1e-9 * static_cast<double>(j.time_ns - start_ns);
-      if (j.kind == JournalEntry::kViolation) {
-        std::fprintf(log,
-                     "t=%.4fs tick %lld: violation %.1e after %d iterations, %d contacts, lowest "
-                     "beta %.1e m\n",
-                     t, static_cast<long long>(j.tick), j.violation, j.iterations, j.contacts,
-                     j.min_beta);
-      } else {
-        std::fprintf(log,
-                     "t=%.4fs tick %lld: contact %s %s, surfaces %d-%d at (%.4f %.4f %.4f %.4f)\n",
-                     t, static_cast<long long>(j.tick), j.added ? "added" : "removed",
-                     j.kind == JournalEntry::kEventApplied ? "applied" : "dropped", j.surface_a,
-                     j.surface_b, j.u[0], j.u[1], j.u[2], j.u[3]);
-      }
+      FormatJournalEntry(j, start_ns, line, sizeof(line));
+      std::fprintf(log, "%s\n", line);
     }
   }
 

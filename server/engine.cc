@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <ctime>
 #include <vector>
 
@@ -61,6 +62,23 @@ inline void CpuRelax() {
 }
 
 }  // namespace
+
+void FormatJournalEntry(const JournalEntry& j, int64_t start_ns, char* out, size_t size) {
+  const double t = 1e-9 * static_cast<double>(j.time_ns - start_ns);
+  if (j.kind == JournalEntry::kViolation) {
+    std::snprintf(out, size,
+                  "t=%.4fs tick %lld: violation %.1e after %d iterations, %d contacts, lowest "
+                  "beta %.1e m",
+                  t, static_cast<long long>(j.tick), j.violation, j.iterations, j.contacts,
+                  j.min_beta);
+  } else {
+    std::snprintf(out, size,
+                  "t=%.4fs tick %lld: contact %s %s, surfaces %d-%d at (%.4f %.4f %.4f %.4f)", t,
+                  static_cast<long long>(j.tick), j.added ? "added" : "removed",
+                  j.kind == JournalEntry::kEventApplied ? "applied" : "dropped", j.surface_a,
+                  j.surface_b, j.u[0], j.u[1], j.u[2], j.u[3]);
+  }
+}
 
 double DurationHistogram::Quantile(const uint64_t* counts, double q) {
   const uint64_t total = Total(counts);
@@ -288,12 +306,7 @@ void Engine::GlobalThread() {
       ServoLoop::ToGlobalInput(snap, &poses, &tracked);
       stage.Run(poses, tracked, &events);
       for (const contact::ContactEvent& e : events) {
-        ContactEventMsg m;
-        m.added = e.kind == contact::ContactEvent::Kind::kAdded ? 1 : 0;
-        m.surface_a = e.contact.a;
-        m.surface_b = e.contact.b;
-        for (int i = 0; i < 4; ++i) m.u[i] = e.contact.u[i];
-        if (events_.Push(m)) events_pushed_.fetch_add(1);
+        if (events_.Push(ServoLoop::ToEventMsg(e))) events_pushed_.fetch_add(1);
       }
       global_.Add(1e-3 * static_cast<double>(MonotonicNs() - t0));
       global_passes_.fetch_add(1, std::memory_order_relaxed);

@@ -90,6 +90,10 @@ struct JournalEntry {
   int32_t iterations = 0, contacts = 0;
 };
 
+/// One line for a journal entry (no newline), times relative to start_ns; snprintf into a
+/// caller's buffer (no allocation).
+void FormatJournalEntry(const JournalEntry& j, int64_t start_ns, char* out, size_t size);
+
 class Engine {
  public:
   Engine(Scene* scene, const EngineOptions& options);

@@ -102,14 +102,7 @@ ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene),
       slots_.push_back({lo, hi, p.inequalities()[static_cast<size_t>(index)].row, false, term});
     }
   }
-  for (const auto& e : events) {
-    ContactEventMsg msg;
-    msg.added = 1;
-    msg.surface_a = e.contact.a;
-    msg.surface_b = e.contact.b;
-    for (int i = 0; i < 4; ++i) msg.u[i] = e.contact.u[i];
-    Apply(msg);
-  }
+  for (const auto& e : events) Apply(ToEventMsg(e));  // (a cold pass only adds)
 
   // The grasp: a position goal at the grasp point (its weight is the coupling stiffness, in
   // the units where least astonishment has the problem's default weight), and for 6-DOF an
@@ -325,6 +318,15 @@ void ServoLoop::FillSnapshot(Snapshot* s) const {
   s->num_contacts = n;
   const Eigen::Vector3d t = grasp_->target();
   for (int i = 0; i < 3; ++i) s->grasp_target[i] = t[i];
+}
+
+ContactEventMsg ServoLoop::ToEventMsg(const contact::ContactEvent& e) {
+  ContactEventMsg m;
+  m.added = e.kind == contact::ContactEvent::Kind::kAdded ? 1 : 0;
+  m.surface_a = e.contact.a;
+  m.surface_b = e.contact.b;
+  for (int i = 0; i < 4; ++i) m.u[i] = e.contact.u[i];
+  return m;
 }
 
 void ServoLoop::ToGlobalInput(const Snapshot& s, std::vector<contact::BodyPose>* poses,

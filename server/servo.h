@@ -118,6 +118,8 @@ class ServoLoop {
   /// Converts a global-stage snapshot input: tracked contacts and poses.
   static void ToGlobalInput(const Snapshot& s, std::vector<contact::BodyPose>* poses,
                             std::vector<contact::GlobalContact>* tracked);
+  /// A global-stage event as the servo takes it (plain data for the SPSC ring).
+  static ContactEventMsg ToEventMsg(const contact::ContactEvent& e);
 
   const Eigen::VectorXd& q() const { return q_; }
   const Scene& scene() const { return *scene_; }

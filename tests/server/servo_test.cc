@@ -63,8 +63,7 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
   int64_t seq = 1000;
   for (int k = 0; k < 6000; ++k) {
     const double t = 1e-3 * k;
-    const Eigen::Vector3d hand = bench::DragPath(t);
-    const DeviceSample s = Sample(++seq, hand, now);
+    const DeviceSample s = bench::DragSample(++seq, t, now);
     for (int tick = 0; tick < 4; ++tick) {
       const long before = tangent::testing::AllocationCount();
       servo.Tick(&s, now, &r);
@@ -84,11 +83,7 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
     ServoLoop::ToGlobalInput(snap, &poses, &tracked);
     stage.Run(poses, tracked, &events);
     for (const contact::ContactEvent& e : events) {
-      ContactEventMsg m;
-      m.added = e.kind == contact::ContactEvent::Kind::kAdded;
-      m.surface_a = e.contact.a;
-      m.surface_b = e.contact.b;
-      for (int i = 0; i < 4; ++i) m.u[i] = e.contact.u[i];
+      const ContactEventMsg m = ServoLoop::ToEventMsg(e);
       const long before = tangent::testing::AllocationCount();
       events_applied += servo.Apply(m);
       allocations += tangent::testing::AllocationCount() - before;
