@@ -38,10 +38,12 @@ struct Bridge::Impl {
   bool status;
   std::unique_ptr<lcm::LCM> lcm;
   DeviceFilter filter;
+  tangent::device_state_t device_msg;
   BridgeSummary* summary;
   std::vector<uint64_t> window_prev, window_now, window;
   int64_t last_ticks = 0;
   int64_t last_stats_ns = 0;
+  int64_t stats_period_ns = 1000000000LL;
   int64_t start_ns = 0;
   tangent::wrench_t wrench;
   tangent::contact_states_t contacts;
@@ -74,21 +76,59 @@ struct Bridge::Impl {
     awaiting = false;
   }
 
-  void OnDevice(const lcm::ReceiveBuffer*, const std::string&, const tangent::device_state_t* m) {
-    const DeviceFilter::Verdict v =
-        filter.Check(m->utime, m->seq, m->position, m->orientation, m->velocity);
-    if (v != DeviceFilter::Verdict::kAccepted) return;
+  /// Every packet on the device channel: decoded here (not by LCM's typed handler, which only
+  /// prints a failure) so that undecodable and wrong-type packets are counted.
+  void OnDevicePacket(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    if (device_msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) {
+      ++summary->undecodable;
+      if (rbuf->data_size >= 8 && IsOtherTangentType(rbuf->data)) ++summary->wrong_type;
+      return;
+    }
+    OnDevice(device_msg);
+  }
+
+  /// Whether a packet starts with the fingerprint of another Tangent message type.
+  static bool IsOtherTangentType(const void* data) {
+    int64_t hash = 0;
+    const auto* b = static_cast<const uint8_t*>(data);
+    for (int i = 0; i < 8; ++i)
+      hash = static_cast<int64_t>((static_cast<uint64_t>(hash) << 8) | b[i]);
+    const int64_t others[] = {tangent::wrench_t::getHash(), tangent::loop_stats_t::getHash(),
+                              tangent::scene_state_t::getHash(),
+                              tangent::contact_states_t::getHash()};
+    for (int64_t h : others) {
+      if (hash == h) return true;
+    }
+    return false;
+  }
+
+  void OnDevice(const tangent::device_state_t& m) {
+    DeviceReading r;
+    r.device_id = m.device_id;
+    r.session = m.session;
+    r.utime = m.utime;
+    r.seq = m.seq;
+    std::memcpy(r.position, m.position, sizeof(r.position));
+    std::memcpy(r.orientation, m.orientation, sizeof(r.orientation));
+    std::memcpy(r.velocity, m.velocity, sizeof(r.velocity));
+    const int64_t received = MonotonicNs();
+    const DeviceFilter::Verdict v = filter.Check(r, received);
+    if (!DeviceFilter::Accepted(v)) return;
     DeviceSample s;
-    s.utime = m->utime;
-    s.seq = m->seq;
-    std::memcpy(s.position, m->position, sizeof(s.position));
-    std::memcpy(s.orientation, m->orientation, sizeof(s.orientation));
-    std::memcpy(s.velocity, m->velocity, sizeof(s.velocity));
-    s.buttons = m->buttons;
-    s.received_ns = MonotonicNs();
+    s.utime = m.utime;
+    s.device_id = m.device_id;
+    s.session = m.session;
+    s.seq = m.seq;
+    s.session_index = filter.session_index();
+    s.accepted = filter.counts().accepted;
+    std::memcpy(s.position, m.position, sizeof(s.position));
+    std::memcpy(s.orientation, m.orientation, sizeof(s.orientation));
+    std::memcpy(s.velocity, m.velocity, sizeof(s.velocity));
+    s.buttons = m.buttons;
+    s.received_ns = received;
     engine->Publish(s);
     awaiting = true;
-    awaited_seq = m->seq;
+    awaited_seq = m.seq;
   }
   void OnPing(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     lcm->publish(ch.pong, rbuf->data, rbuf->data_size);
@@ -101,6 +141,8 @@ struct Bridge::Impl {
     while (engine->wrenches().Pop(&w)) {
       if (w.seq >= awaited_seq) awaiting = false;
       wrench.utime = w.utime;
+      wrench.device_id = w.device_id;
+      wrench.session = w.session;
       wrench.seq = w.seq;
       wrench.server_utime = w.server_utime;
       wrench.frame = "device";
@@ -183,16 +225,27 @@ struct Bridge::Impl {
     stats.compute_max_us = DurationHistogram::Quantile(window.data(), 1.0);
     stats.iterations_mean =
         c.ticks > 0 ? static_cast<double>(c.iterations) / static_cast<double>(c.ticks) : 0.0;
-    stats.max_violation = c.max_violation;
+    engine->TakeWindowMax(&stats.max_violation, &stats.max_force_window);
+    stats.max_violation_total = c.max_violation;
     stats.num_contacts = c.num_contacts;
     stats.force_norm = c.force_norm;
     const DeviceFilterCounts& f = filter.counts();
     stats.device_messages = f.accepted;
+    stats.sessions = f.sessions;
+    stats.undecodable = summary->undecodable;
+    stats.wrong_type = summary->wrong_type;
+    stats.lost_before_filter = f.lost;
+    stats.unanswered = c.unanswered;
     stats.rejected_non_finite = f.non_finite;
     stats.rejected_quaternion = f.quaternion;
+    stats.rejected_workspace = f.workspace;
+    stats.rejected_device = f.device;
+    stats.rejected_session = f.session;
     stats.rejected_sequence = f.sequence;
     stats.rejected_jump = f.jump;
     stats.device_timeouts = c.device_timeouts;
+    stats.faults = c.faults;
+    stats.wrenches_sent = summary->wrenches_sent;
     stats.global_passes = engine->global_passes();
     stats.global_pass_us = engine->global_histogram().max();
     stats.contact_events = c.events_applied;
@@ -205,8 +258,7 @@ struct Bridge::Impl {
                   1e-9 * static_cast<double>(now - start_ns), stats.loop_rate_hz,
                   stats.compute_p50_us, stats.compute_p99_us, stats.num_contacts, stats.force_norm,
                   stats.iterations_mean, stats.max_violation, static_cast<long long>(f.accepted),
-                  static_cast<long long>(f.non_finite + f.quaternion + f.sequence + f.jump),
-                  static_cast<long long>(c.device_timeouts));
+                  static_cast<long long>(f.rejected()), static_cast<long long>(c.device_timeouts));
     if (log) {
       std::fprintf(log, "%s\n", line);
       std::fflush(log);
@@ -216,16 +268,25 @@ struct Bridge::Impl {
 };
 
 Bridge::Bridge(Engine* engine, const std::string& url, const Channels& channels, std::FILE* log,
-               bool status_line)
+               bool status_line, const BridgeOptions& options)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
+  const DeviceSpec& dv = engine->servo().scene().device;
+  DeviceFilterOptions fo;
+  fo.device_id = options.device_id;
+  for (int i = 0; i < 3; ++i) {
+    fo.workspace_min[i] = dv.workspace_min[i];
+    fo.workspace_max[i] = dv.workspace_max[i];
+  }
+  m.filter = DeviceFilter(fo);
+  m.stats_period_ns = static_cast<int64_t>(1e9 / options.stats_rate_hz);
   m.engine = engine;
   m.ch = channels;
   m.log = log;
   m.status = status_line;
   m.summary = &summary_;
   m.lcm = OpenLcm(url);
-  lcm::Subscription* sub = m.lcm->subscribe(channels.device, &Impl::OnDevice, &m);
+  lcm::Subscription* sub = m.lcm->subscribe(channels.device, &Impl::OnDevicePacket, &m);
   // LCM's default queue of 30 drops the newest messages at high rates: far above it.
   sub->setQueueCapacity(10000);
   m.lcm->subscribe(channels.ping, &Impl::OnPing, &m)->setQueueCapacity(10000);
@@ -240,7 +301,7 @@ void Bridge::Run(const std::atomic<bool>& stop, double duration_s) {
   Impl& m = *impl_;
   m.start_ns = MonotonicNs();
   m.last_stats_ns = m.start_ns;
-  int64_t next_scene = m.start_ns, next_stats = m.start_ns + 1000000000LL;
+  int64_t next_scene = m.start_ns, next_stats = m.start_ns + m.stats_period_ns;
   pollfd fds[2] = {{m.lcm->getFileno(), POLLIN, 0}, {m.engine->wake_fd(), POLLIN, 0}};
   while (!stop.load()) {
     const int64_t now = MonotonicNs();
@@ -268,12 +329,20 @@ void Bridge::Run(const std::atomic<bool>& stop, double duration_s) {
     if (t >= next_scene || t >= next_stats) m.DrainJournal();
     if (t >= next_stats) {
       m.PublishStats(t);
-      next_stats += 1000000000LL;
+      next_stats += m.stats_period_ns;
+      if (next_stats < t) next_stats = t + m.stats_period_ns;
     }
   }
   m.PublishWrenches();
   if (m.status) std::fprintf(stderr, "\n");
   summary_.filter = m.filter.counts();
+}
+
+int64_t Bridge::Unanswered(const LoopCounters& c) const {
+  // The servo counts the accepted states it skipped between two answers; those after its last
+  // answer (at most the one in the mailbox when the engine stopped) are unanswered too.
+  const int64_t accepted = impl_->filter.counts().accepted;
+  return c.unanswered + std::max<int64_t>(0, accepted - std::max<int64_t>(c.last_accepted, 0));
 }
 
 std::string Bridge::Report() const {
@@ -294,11 +363,16 @@ std::string Bridge::Report() const {
     << "\ncompute_max_us=" << m.engine->compute_histogram().max() << "\noverruns=" << c.overruns
     << "\nlate=" << c.late << "\niterations_mean="
     << (c.ticks ? static_cast<double>(c.iterations) / static_cast<double>(c.ticks) : 0.0)
-    << "\ncontacts=" << c.num_contacts << "\ndevice_messages=" << f.accepted
+    << "\ncontacts=" << c.num_contacts << "\nmax_violation=" << c.max_violation
+    << "\ndevice_messages=" << f.accepted << "\nsessions=" << f.sessions
+    << "\nundecodable=" << summary_.undecodable << "\nwrong_type=" << summary_.wrong_type
+    << "\nlost_before_filter=" << f.lost << "\nunanswered=" << Unanswered(c)
     << "\nrejected_non_finite=" << f.non_finite << "\nrejected_quaternion=" << f.quaternion
-    << "\nrejected_sequence=" << f.sequence << "\nrejected_jump=" << f.jump
-    << "\ndevice_timeouts=" << c.device_timeouts << "\nwrenches_sent=" << summary_.wrenches_sent
-    << "\nwrenches_dropped=" << c.wrenches_dropped
+    << "\nrejected_workspace=" << f.workspace << "\nrejected_device=" << f.device
+    << "\nrejected_session=" << f.session << "\nrejected_sequence=" << f.sequence
+    << "\nrejected_jump=" << f.jump << "\ndevice_timeouts=" << c.device_timeouts
+    << "\nfaults=" << c.faults << "\nwrenches_sent=" << summary_.wrenches_sent
+    << "\ntimeout_wrenches=" << c.timeout_wrenches << "\nwrenches_dropped=" << c.wrenches_dropped
     << "\nglobal_passes=" << m.engine->global_passes()
     << "\nglobal_pass_p50_us=" << DurationHistogram::Quantile(g.data(), 0.5)
     << "\nglobal_pass_max_us=" << m.engine->global_histogram().max()

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -43,20 +44,30 @@ std::unique_ptr<lcm::LCM> OpenLcm(const std::string& url);
 
 struct BridgeSummary {
   DeviceFilterCounts filter;
+  int64_t undecodable = 0;  ///< packets on the device channel that are not a device_state_t
+  int64_t wrong_type = 0;   ///< ... of which another Tangent message type (by fingerprint)
   int64_t wrenches_sent = 0;
   int64_t pings = 0;
+};
+
+struct BridgeOptions {
+  /// The device served (nullopt: the first whose state is accepted; docs/server.md).
+  std::optional<int64_t> device_id;
+  double stats_rate_hz = 1.0;  ///< loop_stats_t messages per second
 };
 
 class Bridge {
  public:
   Bridge(Engine* engine, const std::string& url, const Channels& channels, std::FILE* log,
-         bool status_line);
+         bool status_line, const BridgeOptions& options = {});
   ~Bridge();
   /// Runs until *stop (checked every 10 ms) or `duration_s` (> 0) has passed.
   void Run(const std::atomic<bool>& stop, double duration_s);
   const BridgeSummary& summary() const { return summary_; }
   /// The final report (key=value lines), from the engine's and the bridge's counters.
   std::string Report() const;
+  /// Accepted device states never answered (final: call after the engine stopped).
+  int64_t Unanswered(const LoopCounters& c) const;
 
   struct Impl;
 

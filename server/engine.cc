@@ -65,7 +65,12 @@ inline void CpuRelax() {
 
 void FormatJournalEntry(const JournalEntry& j, int64_t start_ns, char* out, size_t size) {
   const double t = 1e-9 * static_cast<double>(j.time_ns - start_ns);
-  if (j.kind == JournalEntry::kViolation) {
+  if (j.kind == JournalEntry::kFault) {
+    std::snprintf(out, size,
+                  "t=%.4fs tick %lld: fault (non-finite or absurd intermediate): scene restored, "
+                  "force to zero",
+                  t, static_cast<long long>(j.tick));
+  } else if (j.kind == JournalEntry::kViolation) {
     std::snprintf(out, size,
                   "t=%.4fs tick %lld: violation %.1e after %d iterations, %d contacts, lowest "
                   "beta %.1e m",
@@ -227,7 +232,21 @@ void Engine::ServoThread() {
       if (was_fresh && !fresh) ++counters.device_timeouts;
       was_fresh = fresh;
     }
+    if (result.fault) {
+      ++counters.faults;
+      JournalEntry j;
+      j.tick = counters.ticks;
+      j.time_ns = start;
+      j.kind = JournalEntry::kFault;
+      journal_.Push(j);
+    }
+    counters.unanswered += result.unanswered;
     if (result.answered) {
+      if (result.wrench.state == kTimeout) {
+        ++counters.timeout_wrenches;
+      } else {
+        counters.last_accepted = sample.accepted;
+      }
       result.wrench.tick_end_ns = MonotonicNs();
       if (!wrenches_.Push(result.wrench)) ++counters.wrenches_dropped;
       // The eventfd only when the bridge is not watching the ring (Dekker pairing with
@@ -240,7 +259,9 @@ void Engine::ServoThread() {
       counters.force_norm = std::sqrt(result.wrench.force[0] * result.wrench.force[0] +
                                       result.wrench.force[1] * result.wrench.force[1] +
                                       result.wrench.force[2] * result.wrench.force[2]);
+      WindowMax::Raise(&window_.force, counters.force_norm);
     }
+    WindowMax::Raise(&window_.violation, result.violation);
     if (result.violation > options_.journal_violation) {
       servo_->FillSnapshot(&snap);
       JournalEntry j;
@@ -275,10 +296,8 @@ void Engine::ServoThread() {
         next = end + period;
       }
     }
-    if ((counters.ticks & 255) == 0) {
+    if ((counters.ticks & 255) == 0 || result.fault || result.new_session)
       counters_.Write(counters);
-      counters.max_violation = 0.0;
-    }
   }
   counters_.Write(counters);
 }

@@ -59,27 +59,44 @@ class DurationHistogram {
   std::atomic<double> max_{0.0};
 };
 
-/// Counters the servo publishes every 256 ticks (Seqlock), plus the last wrench's size.
+/// Counters the servo publishes every 256 ticks (Seqlock), plus the last wrench's size. Window
+/// maxima since the bridge's last statistics message are kept apart (Engine::TakeWindowMax).
 struct LoopCounters {
   int64_t ticks = 0;
   int64_t early_ticks = 0;     ///< extra ticks for a device state that arrived during the spin
   int64_t overruns = 0;        ///< ticks that started more than one period after their deadline
   int64_t late = 0;            ///< scheduled ticks that finished after their deadline + ½ period
   int64_t iterations = 0;      ///< solver iterations, total
-  double max_violation = 0.0;  ///< since the previous publication
+  double max_violation = 0.0;  ///< since the start
   double force_norm = 0.0;
   int32_t num_contacts = 0;
   int64_t device_timeouts = 0;
   int64_t events_applied = 0;
   int64_t events_dropped = 0;
   int64_t wrenches_dropped = 0;
+  int64_t faults = 0;            ///< ticks with a non-finite or absurd intermediate
+  int64_t unanswered = 0;        ///< accepted device states the servo never answered
+  int64_t last_accepted = 0;     ///< accepted index of the last device state answered
+  int64_t timeout_wrenches = 0;  ///< wrenches sent while the device was silent (state 2)
+};
+
+/// Maxima over a window that a reader closes (lock free: the servo raises them with a CAS, the
+/// reader exchanges them for zero).
+struct WindowMax {
+  std::atomic<double> violation{0.0};
+  std::atomic<double> force{0.0};
+  static void Raise(std::atomic<double>* m, double x) {
+    double seen = m->load(std::memory_order_relaxed);
+    while (x > seen && !m->compare_exchange_weak(seen, x, std::memory_order_relaxed)) {
+    }
+  }
 };
 
 /// A line of the servo's journal (plain data, SPSC ring to whoever reads it: tangentd's log,
 /// the rate benchmark): contact events as applied, and ticks whose solve left a violation above
 /// EngineOptions::journal_violation.
 struct JournalEntry {
-  enum Kind : int32_t { kEventApplied = 0, kEventDropped = 1, kViolation = 2 };
+  enum Kind : int32_t { kEventApplied = 0, kEventDropped = 1, kViolation = 2, kFault = 3 };
   int64_t tick = 0;
   int64_t time_ns = 0;
   int32_t kind = kEventApplied;
@@ -118,6 +135,11 @@ class Engine {
   /// Servo → global stage and bridge.
   const Seqlock<Snapshot>& snapshot() const { return snapshot_; }
   const Seqlock<LoopCounters>& counters() const { return counters_; }
+  /// Closes the statistics window: the largest violation (m) and |force| (N) since the last call.
+  void TakeWindowMax(double* violation, double* force) {
+    *violation = window_.violation.exchange(0.0);
+    *force = window_.force.exchange(0.0);
+  }
   const DurationHistogram& compute_histogram() const { return compute_; }
   const DurationHistogram& global_histogram() const { return global_; }
   int64_t global_passes() const { return global_passes_.load(std::memory_order_relaxed); }
@@ -137,6 +159,7 @@ class Engine {
   SpscRing<ContactEventMsg, 256> events_;
   Seqlock<Snapshot> snapshot_;
   Seqlock<LoopCounters> counters_;
+  WindowMax window_;
   SpscRing<JournalEntry, 256> journal_;
   DurationHistogram compute_, global_;
   std::atomic<int64_t> global_passes_{0};

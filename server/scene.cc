@@ -415,6 +415,24 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
     dv.max_force_rate = d.Positive("max_force_rate", dv.max_force_rate);
     dv.ramp_time = d.Number("ramp_time", dv.ramp_time);
     if (dv.ramp_time < 0.0) d.At("ramp_time").Fail("must not be negative");
+    dv.follow_speed = d.Positive("follow_speed", dv.follow_speed);
+    dv.follow_angular_speed = d.Positive("follow_angular_speed", dv.follow_angular_speed);
+    if (d.Has("workspace")) {
+      const Node w = d.At("workspace");
+      dv.workspace_min = w.At("min").Vector<3>();
+      dv.workspace_max = w.At("max").Vector<3>();
+      for (int i = 0; i < 3; ++i) {
+        if (!(dv.workspace_min[i] < 0.0 && dv.workspace_max[i] > 0.0)) {
+          w.Fail("must contain the device origin strictly (min < 0 < max on each axis), got min " +
+                 Node::Format(dv.workspace_min[i]) + ", max " + Node::Format(dv.workspace_max[i]) +
+                 " on axis " + std::to_string(i));
+        }
+        if (dv.workspace_max[i] - dv.workspace_min[i] > 10.0) {
+          w.Fail("is more than 10 m wide on axis " + std::to_string(i) +
+                 ": a desk device's workspace is in metres (device frame), not scene units");
+        }
+      }
+    }
     // Passivity of the virtual coupling rendered by a sampled device (Colgate): k < 2b/T, and
     // never above what the device itself can render.
     const double limit = 2.0 * dv.damping * dv.device_rate;

@@ -78,6 +78,15 @@ struct DeviceSpec {
   double device_rate = 1000.0;    ///< Hz, the rate the device renders our force at
   double max_force_rate = 500.0;  ///< N/s
   double ramp_time = 1.0;         ///< s, force ramp at start-up and after a timeout
+  /// The device's workspace box, device frame, m: states outside are rejected (DeviceFilter).
+  /// Default: a Touch-class stylus (160 × 120 × 70 mm) with 25 % margin per side.
+  Eigen::Vector3d workspace_min = Eigen::Vector3d(-0.1, -0.075, -0.045);
+  Eigen::Vector3d workspace_max = Eigen::Vector3d(0.1, 0.075, 0.045);
+  /// Speed at which the grasp target follows the stylus, m/s in the device frame (× scale in
+  /// the scene): a hand's fast moves (≤ 1 m/s) are followed at once, a jump becomes a
+  /// continuous path, and meanwhile the coupling force tells the hand where the part is.
+  double follow_speed = 1.0;
+  double follow_angular_speed = 10.0;  ///< rad/s, the same for the 6-DOF orientation target
 };
 
 struct Scene {

@@ -133,7 +133,14 @@ ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene),
   solver_->Solve(&q_);
   scene->mechanism.Poses(q_, &poses_);
   if (!scene->device.origin_given) scene->device.origin = GraspPoint();
-  grasp_->set_target(GraspPoint());
+  target_ = GraspPoint();
+  grasp_->set_target(target_);
+  orientation_target_ = Eigen::Quaterniond(poses_[static_cast<size_t>(grasp_at_.body)].R);
+  if (grasp_orientation_) grasp_orientation_->set_target(orientation_target_.toRotationMatrix());
+  q_good_ = q_;
+  lambda_e_good_ = solver_->equality_multipliers();
+  lambda_i_good_ = solver_->inequality_multipliers();
+  KeepGood();
 }
 
 ServoLoop::~ServoLoop() = default;
@@ -173,6 +180,7 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
       nearest = &s;
     }
   }
+  if (!u.allFinite()) return false;  // (never from the global stage; a defined answer anyway)
   if (!e.added) {
     // Only the contact the event names: a slot elsewhere on the pair is another contact (the
     // named one may be gone already, e.g. freed by an earlier event).
@@ -204,89 +212,259 @@ int ServoLoop::active_contacts() const {
   return n;
 }
 
+Eigen::Vector3d ServoLoop::GraspTarget() const { return target_; }
+
+namespace {
+
+// The follow step is bounded per tick by the speed times at most this much time, s: a servo that
+// stalls lets the target lag rather than jump (the global stage and the solver's warm start
+// both assume small steps; 2 ms at 1 m/s is 2 mm).
+constexpr double kFollowStepTime = 2e-3;
+
+}  // namespace
+
+bool ServoLoop::Follow(const DeviceSample& d, double dt) {
+  const DeviceSpec& dv = scene_->device;
+  double n2 = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    // The bridge's filter has already judged the sample: this is the second line of defence.
+    if (!(d.position[i] >= dv.workspace_min[i] && d.position[i] <= dv.workspace_max[i])) {
+      return false;
+    }
+  }
+  for (int i = 0; i < 4; ++i) n2 += d.orientation[i] * d.orientation[i];
+  if (!(std::abs(n2 - 1.0) < 1e-2)) return false;
+  const Eigen::Vector3d p_WT = ToolPoint(d);  // the tool point in the world
+  const double h = std::min(dt, kFollowStepTime);
+  const Eigen::Vector3d step = p_WT - target_;
+  const double max_step = dv.follow_speed * dv.scale * h;
+  const double n = step.norm();
+  target_ += n > max_step ? step * (max_step / n) : step;
+  if (grasp_orientation_) {
+    const Eigen::Quaterniond Q_DT(d.orientation[0], d.orientation[1], d.orientation[2],
+                                  d.orientation[3]);
+    const Eigen::Quaterniond Q_WT = Eigen::Quaterniond(dv.rotation) * Q_DT.normalized();
+    const double angle = orientation_target_.angularDistance(Q_WT);
+    const double max_angle = dv.follow_angular_speed * h;
+    orientation_target_ =
+        angle > max_angle ? orientation_target_.slerp(max_angle / angle, Q_WT) : Q_WT;
+  }
+  return target_.allFinite() && orientation_target_.coeffs().allFinite();
+}
+
+bool ServoLoop::Sane(const optimizer::SolveStats& st) const {
+  if (!q_.allFinite() || !std::isfinite(st.max_violation) || !std::isfinite(st.kkt_residual)) {
+    return false;
+  }
+  if (st.max_violation > options_.fault_violation) return false;
+  if (!solver_->equality_multipliers().allFinite() ||
+      !solver_->inequality_multipliers().allFinite()) {
+    return false;
+  }
+  for (Eigen::Index b = 0; b + 7 <= q_.size(); b += 7) {
+    if (q_.segment<3>(b).norm() > options_.fault_distance) return false;
+  }
+  return true;
+}
+
+void ServoLoop::KeepGood() {
+  q_good_ = q_;  // (same sizes: Eigen assigns in place, no allocation)
+  lambda_e_good_ = solver_->equality_multipliers();
+  lambda_i_good_ = solver_->inequality_multipliers();
+  for (Slot& s : slots_) {
+    if (s.term->active()) s.good_u = s.term->extremum().u;
+  }
+  target_good_ = target_;
+  orientation_target_good_ = orientation_target_;
+}
+
+void ServoLoop::RestoreGood() {
+  q_ = q_good_;
+  solver_->set_multipliers(lambda_e_good_, lambda_i_good_);
+  for (Slot& s : slots_) {
+    if (s.term->active()) s.term->Reseed(s.good_u);
+  }
+  target_ = target_good_;
+  orientation_target_ = orientation_target_good_;
+  grasp_->set_target(target_);
+  if (grasp_orientation_) grasp_orientation_->set_target(orientation_target_.toRotationMatrix());
+}
+
+void ServoLoop::StartSession(int64_t session_index) {
+  session_index_ = session_index;
+  ramp_ = 0.0;
+  force_.setZero();
+  torque_.setZero();
+  have_error_ = false;
+  last_seq_ = -1;
+  last_answer_ns_ = 0;
+  last_timeout_ns_ = 0;
+}
+
+void ServoLoop::FillWrench(const DeviceSample& d, int64_t now_ns, int8_t state,
+                           WrenchSample* w) const {
+  w->utime = d.utime;
+  w->seq = d.seq;
+  w->device_id = d.device_id;
+  w->session = d.session;
+  w->server_utime = now_ns / 1000;
+  w->received_ns = d.received_ns;
+  w->tick_start_ns = now_ns;
+  for (int i = 0; i < 3; ++i) {
+    w->force[i] = force_[i];
+    w->torque[i] = options_.dof == 6 ? torque_[i] : 0.0;
+  }
+  w->state = state;
+}
+
 void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out) {
   const DeviceSpec& dv = scene_->device;
-  const double dt = last_tick_ns_ > 0 ? 1e-9 * static_cast<double>(now_ns - last_tick_ns_) : 0.0;
+  // The server's own clock, for everything timed: the client's utime is only echoed.
+  const double dt =
+      last_tick_ns_ > 0 ? std::max(0.0, 1e-9 * static_cast<double>(now_ns - last_tick_ns_)) : 0.0;
   last_tick_ns_ = now_ns;
   ++ticks_;
-  out->answered = false;
+  out->answered = out->fault = out->new_session = false;
+  out->unanswered = 0;
+  const InjectedFault inject = injected_;
+  injected_ = InjectedFault{};
+  DeviceSample injected_sample;
+  if (device && inject.stage == InjectedFault::kDeviceState) {
+    injected_sample = *device;
+    injected_sample.position[0] = inject.value;
+    device = &injected_sample;
+  }
+  if (device && device->session_index != session_index_) {
+    StartSession(device->session_index);
+    out->new_session = true;
+  }
   const bool fresh =
       device && 1e-9 * static_cast<double>(now_ns - device->received_ns) <= options_.device_timeout;
   out->timed_out = device && !fresh;
-  if (fresh) {
-    grasp_->set_target(ToolPoint(*device));
-    if (grasp_orientation_) {
-      const Eigen::Quaterniond Q(device->orientation[0], device->orientation[1],
-                                 device->orientation[2], device->orientation[3]);
-      grasp_orientation_->set_target(dv.rotation * Q.toRotationMatrix());
-    }
+
+  // 1. The grasp targets follow the device; 2. the warm solve; 3. any non-finite or absurd
+  // intermediate restores the last good state (configuration, multipliers, tracked contacts,
+  // targets) and sends the force to zero.
+  bool fault = fresh && !Follow(*device, dt);
+  if (inject.stage == InjectedFault::kGoal) target_[0] = inject.value;
+  optimizer::SolveStats st;
+  if (!fault && target_.allFinite() && target_.norm() <= options_.fault_distance) {
+    grasp_->set_target(target_);
+    if (grasp_orientation_) grasp_orientation_->set_target(orientation_target_.toRotationMatrix());
+    st = solver_->Solve(&q_);
+    if (inject.stage == InjectedFault::kSolverResult) q_[0] = inject.value;
+    fault = !Sane(st);
+  } else {
+    fault = true;
   }
-  // Solve (also when the hand holds still or is gone: the contacts settle to machine precision
-  // and the scene holds at the last target).
-  const optimizer::SolveStats st = solver_->Solve(&q_);
+  if (fault) {
+    RestoreGood();
+    ramp_ = 0.0;
+    out->violation = good_violation_;
+  } else {
+    KeepGood();
+    good_violation_ = st.max_violation;
+    out->violation = st.max_violation;
+  }
   scene_->mechanism.Poses(q_, &poses_);
+  out->fault = fault;
   out->iterations = st.iterations;
-  out->violation = st.max_violation;
   out->kkt = st.kkt_residual;
   out->num_contacts = active_contacts();
 
-  // The ramp: up over ramp_time while the device is fresh, down while it is not (then the force
-  // scales down with it and the scene holds at the last target).
+  // The ramp: up over ramp_time while the device is fresh, down while it is not (the force
+  // scales down with it and the scene holds at the last target); a fault restarts it from zero.
   const double ramp_rate = dv.ramp_time > 0.0 ? dt / dv.ramp_time : 1.0;
   const double previous = ramp_;
-  ramp_ = std::clamp(ramp_ + (fresh ? ramp_rate : -ramp_rate), 0.0, 1.0);
+  if (!fault) ramp_ = std::clamp(ramp_ + (fresh ? ramp_rate : -ramp_rate), 0.0, 1.0);
   if (!fresh) {
-    const double scale = previous > 0.0 ? ramp_ / previous : 0.0;
-    force_ *= scale;
-    torque_ *= scale;
+    // Silent device: the force follows the ramp down, never faster than the rate limit; one
+    // timeout wrench per device period until it is zero (a driver still listening renders the
+    // ramp instead of holding its last force).
+    const Eigen::Vector3d goal =
+        previous > 0.0 ? Eigen::Vector3d(force_ * (ramp_ / previous)) : Eigen::Vector3d::Zero();
+    const double max_step = dv.max_force_rate * dt;
+    const Eigen::Vector3d step = goal - force_;
+    force_ += step.norm() > max_step ? Eigen::Vector3d(step * (max_step / step.norm())) : step;
+    torque_ *= previous > 0.0 ? ramp_ / previous : 0.0;
     have_error_ = false;
+    const bool due = 1e-9 * static_cast<double>(now_ns - last_timeout_ns_) >= 1.0 / dv.device_rate;
+    if (device && last_seq_ >= 0 && due && !timeout_final_sent_) {
+      FillWrench(last_answered_, now_ns, fault ? kFault : kTimeout, &out->wrench);
+      out->answered = true;
+      last_timeout_ns_ = now_ns;
+      timeout_final_sent_ = force_.isZero(0.0) && torque_.isZero(0.0);
+    }
     return;
   }
+  timeout_final_sent_ = false;
   if (device->seq == last_seq_) return;  // this sample is answered already
-  // Virtual coupling at the hand (device frame): the grasp point's offset from the tool point,
-  // mapped back through the workspace scale, with damping on its rate of change.
-  const Eigen::Vector3d error =
-      dv.rotation.transpose() * (GraspPoint() - grasp_->target()) / dv.scale;
-  const double dt_device =
-      last_seq_ >= 0 ? 1e-6 * static_cast<double>(device->utime - last_device_utime_) : 0.0;
-  Eigen::Vector3d rate = Eigen::Vector3d::Zero();
-  if (have_error_ && dt_device > 0.0) rate = (error - error_prev_) / dt_device;
-  Eigen::Vector3d force = dv.stiffness * error + dv.damping * rate;
-  if (force.norm() > dv.max_force) force *= dv.max_force / force.norm();
+  if (device->accepted > last_accepted_ + 1) {
+    out->unanswered = device->accepted - last_accepted_ - 1;
+  }
+  last_accepted_ = device->accepted;
+  // Virtual coupling at the hand (device frame): the grasp point's offset from the tool point
+  // (the device's own, not the following target: after a jump the force, not a teleport, tells
+  // the hand where the part is), mapped back through the workspace scale, with damping on its
+  // rate of change over the server's time between answers.
+  const double dt_answer =
+      last_answer_ns_ > 0 ? 1e-9 * static_cast<double>(now_ns - last_answer_ns_) : 0.0;
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  Eigen::Vector3d torque = Eigen::Vector3d::Zero();
+  if (!fault) {
+    const Eigen::Vector3d error =
+        dv.rotation.transpose() * (GraspPoint() - ToolPoint(*device)) / dv.scale;
+    Eigen::Vector3d rate = Eigen::Vector3d::Zero();
+    if (have_error_ && dt_answer > 0.0) rate = (error - error_prev_) / std::max(dt_answer, 1e-4);
+    force = dv.stiffness * error + dv.damping * rate;
+    if (inject.stage == InjectedFault::kCoupling) force[0] = inject.value;
+    if (grasp_orientation_) {
+      // τ on the hand = R ¼ G(Q) ∂E/∂Q (the reaction of the body-frame torque −¼ G(Q) ∂E/∂Q
+      // that the orientation coupling exerts on the grasped body; seed 001 Eq. 5), device frame.
+      grasp_orientation_->Evaluate(poses_, r9_, J9_, J9b_);
+      const contact::BodyPose& gp = poses_[static_cast<size_t>(grasp_at_.body)];
+      const Eigen::Vector4d dE_dQ =
+          0.5 * scene_->grasp.rotational_stiffness * J9_.rightCols<4>().transpose() * r9_;
+      torque = dv.rotation.transpose() * gp.R *
+               contact::TorqueFromQuaternionForce(gp.q.tail<4>(), dE_dQ);
+    }
+    // A force or torque whose square overflows is absurd (the workspace bounds the error to
+    // metres, so k·error is at most ~1e4 N): a fault like a non-finite one.
+    if (!std::isfinite(force.squaredNorm()) || !std::isfinite(torque.squaredNorm())) {
+      fault = true;
+      out->fault = true;
+      ramp_ = 0.0;
+      force.setZero();
+      torque.setZero();
+    } else {
+      error_prev_ = error;
+      have_error_ = true;
+    }
+  }
+  const double f = force.norm();
+  if (f > dv.max_force) force *= dv.max_force / f;
   force *= ramp_;
-  // Force-rate limit between answers.
-  const double max_step = dv.max_force_rate * std::max(dt_device, 1e-4);
+  torque *= ramp_;
+  // Force-rate limit between answers, on the server's clock, and at most two device periods'
+  // worth per answer (a device holds its last force between answers: a late answer must not
+  // step further than a punctual one could).
+  const double max_step = dv.max_force_rate * std::min(dt_answer, 2.0 / dv.device_rate);
   const Eigen::Vector3d step = force - force_;
-  force_ += step.norm() > max_step ? step * (max_step / step.norm()) : step;
+  const double s = step.norm();
+  force_ += s > max_step ? Eigen::Vector3d(step * (max_step / s)) : step;
   if (force_.norm() > dv.max_force) force_ *= dv.max_force / force_.norm();
-  if (grasp_orientation_) {
-    // τ on the hand = R ¼ G(Q) ∂E/∂Q (the reaction of the body-frame torque −¼ G(Q) ∂E/∂Q that
-    // the orientation coupling exerts on the grasped body; seed 001 Eq. 5), device frame.
-    grasp_orientation_->Evaluate(poses_, r9_, J9_, J9b_);
-    const contact::BodyPose& gp = poses_[static_cast<size_t>(grasp_at_.body)];
-    const Eigen::Vector4d dE_dQ =
-        0.5 * scene_->grasp.rotational_stiffness * J9_.rightCols<4>().transpose() * r9_;
-    Eigen::Vector3d torque =
-        dv.rotation.transpose() * gp.R * contact::TorqueFromQuaternionForce(gp.q.tail<4>(), dE_dQ);
-    torque *= ramp_;
-    torque_ = torque;
+  torque_ = torque;
+  if (!force_.allFinite() || !torque_.allFinite()) {  // unreachable: the last line of defence
+    force_.setZero();
+    torque_.setZero();
+    fault = true;
+    out->fault = true;
   }
-  error_prev_ = error;
-  have_error_ = true;
   last_seq_ = device->seq;
-  last_device_utime_ = device->utime;
+  last_answer_ns_ = now_ns;
+  last_answered_ = *device;
   out->answered = true;
-  WrenchSample& w = out->wrench;
-  w.utime = device->utime;
-  w.seq = device->seq;
-  w.server_utime = now_ns / 1000;
-  w.received_ns = device->received_ns;
-  w.tick_start_ns = now_ns;
-  for (int i = 0; i < 3; ++i) {
-    w.force[i] = force_[i];
-    w.torque[i] = options_.dof == 6 ? torque_[i] : 0.0;
-  }
-  w.state = ramp_ < 1.0 ? 1 : 0;
+  FillWrench(*device, now_ns, fault ? kFault : (ramp_ < 1.0 ? kRampingUp : kRunning), &out->wrench);
 }
 
 void ServoLoop::FillSnapshot(Snapshot* s) const {

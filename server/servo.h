@@ -24,8 +24,16 @@ inline constexpr int kMaxContacts = 32;
 
 /// A device state the LCM bridge accepted (plain data: it crosses threads in a Seqlock).
 struct DeviceSample {
-  int64_t utime = 0;                     ///< client clock, µs (echoed)
-  int64_t seq = 0;                       ///< echoed
+  int64_t utime = 0;      ///< client clock, µs (echoed, never used for timing)
+  int64_t device_id = 0;  ///< echoed
+  int64_t session = 0;    ///< echoed
+  int64_t seq = 0;        ///< echoed
+  /// Sessions started so far at the bridge (DeviceFilter::session_index): when it changes, the
+  /// servo starts the new session's coupling afresh (force from zero, a new ramp).
+  int64_t session_index = 0;
+  /// Index of this state among all accepted ones (1, 2, ...): gaps between the states the
+  /// servo answers are accepted states it never answered.
+  int64_t accepted = 0;
   double position[3] = {0, 0, 0};        ///< device frame, m
   double orientation[4] = {1, 0, 0, 0};  ///< device frame, (w, x, y, z)
   double velocity[3] = {0, 0, 0};        ///< device frame, m/s
@@ -60,15 +68,19 @@ struct ContactEventMsg {
   double u[4] = {0, 0, 0, 0};
 };
 
+/// Wrench states (wrench_t.state).
+enum WrenchState : int8_t { kRunning = 0, kRampingUp = 1, kTimeout = 2, kFault = 3 };
+
 /// The wrench of one tick, device frame (plain data, for the SPSC ring to the bridge).
 struct WrenchSample {
-  int64_t utime = 0, seq = 0;  ///< echo of the device sample answered
+  int64_t utime = 0, seq = 0;          ///< echo of the device sample answered
+  int64_t device_id = 0, session = 0;  ///< echo of the device sample answered
   int64_t server_utime = 0;
   int64_t received_ns = 0;  ///< the device sample's receipt (bridge), CLOCK_MONOTONIC
   int64_t tick_start_ns = 0, tick_end_ns = 0;  ///< the answering tick (tick_end_ns: engine)
   double force[3] = {0, 0, 0};                 ///< N
   double torque[3] = {0, 0, 0};                ///< N m
-  int8_t state = 0;                            ///< 0 running, 1 ramping up, 2 timeout
+  int8_t state = kRunning;                     ///< WrenchState
 };
 
 struct ServoOptions {
@@ -81,6 +93,20 @@ struct ServoOptions {
   /// counts, Newton's last step lands far below all three.)
   double kkt_tolerance = 1e-8;
   double device_timeout = 0.1;  ///< s without device states: force ramps to zero, scene holds
+  /// A tick whose solve leaves a constraint violation above this is a fault (the scene is
+  /// restored): 1 cm is 1e8 times the servo's constraint tolerance and far above any transient
+  /// measured on the drag (worst 1e-10 m, docs/server.md), so only a broken solve reaches it.
+  double fault_violation = 1e-2;
+  /// A body farther than this from the world origin is a fault, m: a desk device's workspace
+  /// times any sensible scale is metres; beyond this a part has been thrown away.
+  double fault_distance = 100.0;
+};
+
+/// Test hooks: a one-shot value injected into one stage of the next tick, to show that a
+/// non-finite or absurd intermediate there is caught (ServoTest.*Fault*).
+struct InjectedFault {
+  enum Stage { kNone, kDeviceState, kGoal, kSolverResult, kCoupling } stage = kNone;
+  double value = 0.0;
 };
 
 struct TickResult {
@@ -91,6 +117,9 @@ struct TickResult {
   double kkt = 0.0;  ///< stationarity residual of the tick's solve
   int num_contacts = 0;
   bool timed_out = false;
+  bool fault = false;      ///< a non-finite or absurd intermediate: scene restored, force to zero
+  int64_t unanswered = 0;  ///< accepted states skipped before the one this tick answered
+  bool new_session = false;
 };
 
 class ServoLoop {
@@ -128,6 +157,10 @@ class ServoLoop {
   Eigen::Vector3d GraspPoint() const;
   int active_contacts() const;
   const optimizer::Problem& problem() const { return *problem_; }
+  /// The grasp goal's target (world, m): follows the tool point at the device's follow speed.
+  Eigen::Vector3d GraspTarget() const;
+  /// Injects a fault into the next tick (tests).
+  void InjectFault(const InjectedFault& f) { injected_ = f; }
 
  private:
   struct Slot {
@@ -135,7 +168,21 @@ class ServoLoop {
     int row = 0;                       ///< inequality row (multiplier index)
     bool floating = false;
     std::shared_ptr<optimizer::SurfaceContactTerm> term;
+    Eigen::Vector4d good_u = Eigen::Vector4d::Zero();  ///< tracked parameters, last good tick
   };
+
+  /// Moves the grasp targets toward the device's tool pose, at most the follow speeds times dt.
+  /// @return false when the sample is not sane (not finite, outside the workspace).
+  bool Follow(const DeviceSample& d, double dt);
+  /// Whether the solve left a finite, sane configuration.
+  bool Sane(const optimizer::SolveStats& st) const;
+  /// Keeps / restores the last good configuration, multipliers and tracked contacts.
+  void KeepGood();
+  void RestoreGood();
+  /// Starts a new device session's coupling: zero force, a new ramp.
+  void StartSession(int64_t session_index);
+  /// Fills the wrench answering `d` (or the timeout wrench) from force_ and torque_.
+  void FillWrench(const DeviceSample& d, int64_t now_ns, int8_t state, WrenchSample* w) const;
 
   Scene* scene_;
   ServoOptions options_;
@@ -147,9 +194,23 @@ class ServoLoop {
   std::vector<Slot> slots_;
   Eigen::VectorXd q_;
   std::vector<contact::BodyPose> poses_;
-  // Coupling state.
+  // Last good state (restored after a fault).
+  Eigen::VectorXd q_good_, lambda_e_good_, lambda_i_good_;
+  Eigen::Vector3d target_good_ = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation_target_good_ = Eigen::Quaterniond::Identity();
+  // Grasp targets (world): they follow the tool pose at bounded speed.
+  Eigen::Vector3d target_ = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation_target_ = Eigen::Quaterniond::Identity();
+  InjectedFault injected_;
+  // Coupling state (server clock only: the client's utime is echoed, never used).
+  int64_t session_index_ = 0;
   int64_t last_seq_ = -1;
-  int64_t last_device_utime_ = 0;
+  int64_t last_accepted_ = 0;        ///< accepted index of the last sample answered
+  int64_t last_answer_ns_ = 0;       ///< server time of the last answer
+  int64_t last_timeout_ns_ = 0;      ///< server time of the last timeout wrench
+  DeviceSample last_answered_;       ///< echoed by timeout wrenches
+  bool timeout_final_sent_ = false;  ///< the zero-force timeout wrench has gone
+  double good_violation_ = 0.0;      ///< violation of the last good tick
   Eigen::Vector3d error_prev_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d force_ = Eigen::Vector3d::Zero(), torque_ = Eigen::Vector3d::Zero();
   double ramp_ = 0.0;  ///< 0..1

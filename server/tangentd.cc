@@ -25,6 +25,8 @@ int main(int argc, char** argv) {
   Channels ch;
   double duration = 0.0;
   bool status = false;
+  BridgeOptions bo;
+  int64_t device_id = 0;
   app.add_option("--scene", scene_path, "scene file (JSON)")->required()->check(CLI::ExistingFile);
   app.add_option("--rate", eo.rate_hz, "servo loop rate, Hz")->check(CLI::Range(100.0, 50000.0));
   app.add_option("--spin-us", eo.spin_us, "spin this long before each deadline, us")
@@ -45,11 +47,17 @@ int main(int argc, char** argv) {
   app.add_option("--contacts-channel", ch.contacts, "channel of contact_states_t");
   app.add_option("--stats-channel", ch.stats, "channel of loop_stats_t");
   app.add_option("--scene-channel", ch.scene, "channel of scene_state_t");
+  auto* device_id_option =
+      app.add_option("--device-id", device_id,
+                     "the device served (default: the first device whose state is accepted)");
+  app.add_option("--stats-rate", bo.stats_rate_hz, "loop_stats_t messages per second")
+      ->check(CLI::Range(0.1, 100.0));
   app.add_option("--log", log_path, "log file (load log and one status line per second)");
   app.add_option("--duration", duration, "stop after this many seconds (0: run until a signal)");
   app.add_flag("--status", status, "print a live status line");
   CLI11_PARSE(app, argc, argv);
 
+  if (*device_id_option) bo.device_id = device_id;
   std::FILE* log = nullptr;
   if (!log_path.empty()) {
     log = std::fopen(log_path.c_str(), "w");
@@ -67,7 +75,7 @@ int main(int argc, char** argv) {
       if (log) std::fprintf(log, "load: %s\n", line.c_str());
     }
     Engine engine(scene.get(), eo);
-    Bridge bridge(&engine, url, ch, log, status);
+    Bridge bridge(&engine, url, ch, log, status, bo);
     std::printf(
         "tangentd: scene \"%s\": %d bodies, %zu surfaces, %zu contact pairs, %d contacts "
         "at rest; %.0f Hz, %d-DOF device, LCM %s\n",

@@ -1,5 +1,7 @@
-// Device messages the server must never apply: NaN/inf, a non-unit quaternion, a stale or
-// repeated sequence number, an implausible jump. Each is rejected and counted by reason.
+// Device states the server must never apply, and the session rules (docs/server.md "Device
+// sessions"): NaN/inf, a non-unit quaternion, a position outside the workspace, another device,
+// a stale session, a stale or repeated sequence number, an implausible jump. Each is rejected and
+// counted by reason; gaps in the served session's sequence numbers are counted as lost.
 
 #include "server/device_filter.h"
 
@@ -11,53 +13,125 @@ namespace tangent::server {
 namespace {
 
 using V = DeviceFilter::Verdict;
+constexpr int64_t ms = 1'000'000;  // ns
 
-struct Msg {
-  int64_t utime = 1000, seq = 1;
-  double p[3] = {0, 0, 0}, q[4] = {1, 0, 0, 0}, v[3] = {0, 0, 0};
-};
+DeviceReading State(int64_t session, int64_t seq, double x = 0.0, int64_t device = 7) {
+  DeviceReading m;
+  m.device_id = device;
+  m.session = session;
+  m.seq = seq;
+  m.utime = 1000 * seq;
+  m.position[0] = x;
+  return m;
+}
 
-TEST(DeviceFilterTest, RejectsAndCountsEachKindOfBadMessage) {
+TEST(DeviceFilterTest, RejectsAndCountsEachKindOfBadContent) {
   DeviceFilter f;
-  Msg m;
-  EXPECT_EQ(f.Check(m.utime, m.seq, m.p, m.q, m.v), V::kAccepted);
-  Msg nan = m;
-  nan.seq = 2;
-  nan.p[1] = NAN;
-  EXPECT_EQ(f.Check(nan.utime, nan.seq, nan.p, nan.q, nan.v), V::kNonFinite);
-  Msg inf = m;
-  inf.seq = 2;
-  inf.v[2] = INFINITY;
-  EXPECT_EQ(f.Check(inf.utime, inf.seq, inf.p, inf.q, inf.v), V::kNonFinite);
-  Msg quat = m;
-  quat.seq = 2;
-  quat.q[0] = 0.9;
-  EXPECT_EQ(f.Check(quat.utime, quat.seq, quat.p, quat.q, quat.v), V::kQuaternion);
-  EXPECT_EQ(f.Check(m.utime + 1000, 1, m.p, m.q, m.v), V::kSequence);  // repeated
-  EXPECT_EQ(f.Check(m.utime + 1000, 0, m.p, m.q, m.v), V::kSequence);  // stale
-  Msg jump = m;
-  jump.seq = 3;
-  jump.utime += 1000;
-  jump.p[0] = 0.2;  // 20 cm in 1 ms
-  EXPECT_EQ(f.Check(jump.utime, jump.seq, jump.p, jump.q, jump.v), V::kJump);
-  Msg ok = m;
-  ok.seq = 4;
-  ok.utime += 2000;
-  ok.p[0] = 0.002;  // 2 mm in 2 ms: a fast hand, plausible
-  EXPECT_EQ(f.Check(ok.utime, ok.seq, ok.p, ok.q, ok.v), V::kAccepted);
-  // After a silence longer than reacquire_after, any position is accepted.
-  Msg back = ok;
-  back.seq = 5;
-  back.utime += 500000;
-  back.p[0] = 0.05;
-  EXPECT_EQ(f.Check(back.utime, back.seq, back.p, back.q, back.v), V::kAccepted);
+  int64_t now = 1000 * ms;
+  EXPECT_EQ(f.Check(State(1, 1), now), V::kNewSession);
+  DeviceReading nan = State(1, 2);
+  nan.position[1] = NAN;
+  EXPECT_EQ(f.Check(nan, now += ms), V::kNonFinite);
+  DeviceReading inf = State(1, 3);
+  inf.velocity[2] = INFINITY;
+  EXPECT_EQ(f.Check(inf, now += ms), V::kNonFinite);
+  DeviceReading qnan = State(1, 4);
+  qnan.orientation[3] = NAN;
+  EXPECT_EQ(f.Check(qnan, now += ms), V::kNonFinite);
+  DeviceReading quat = State(1, 5);
+  quat.orientation[0] = 0.9;
+  EXPECT_EQ(f.Check(quat, now += ms), V::kQuaternion);
+  // Huge finite positions (the attack that poisoned every later wrench) and a far one.
+  EXPECT_EQ(f.Check(State(1, 6, 1e308), now += ms), V::kWorkspace);
+  EXPECT_EQ(f.Check(State(1, 7, -1e9), now += ms), V::kWorkspace);
+  EXPECT_EQ(f.Check(State(1, 8, 0.1001), now += ms), V::kWorkspace);  // just outside the box
+  // Sequence numbers are judged against the last accepted state (1 here).
+  EXPECT_EQ(f.Check(State(1, 8, 0.0), now += ms), V::kAccepted);
+  EXPECT_EQ(f.Check(State(1, 8, 0.0), now += ms), V::kSequence);         // repeated
+  EXPECT_EQ(f.Check(State(1, 3, 0.0), now += ms), V::kSequence);         // stale
+  EXPECT_EQ(f.Check(State(1, 9, 0.05), now += ms), V::kJump);            // 5 cm in 1 ms
+  EXPECT_EQ(f.Check(State(1, 10, 0.002), now += 2 * ms), V::kAccepted);  // 2 mm in 3 ms
   const DeviceFilterCounts& c = f.counts();
   EXPECT_EQ(c.accepted, 3);
-  EXPECT_EQ(c.non_finite, 2);
+  EXPECT_EQ(c.sessions, 1);
+  EXPECT_EQ(c.non_finite, 3);
   EXPECT_EQ(c.quaternion, 1);
+  EXPECT_EQ(c.workspace, 3);
   EXPECT_EQ(c.sequence, 2);
   EXPECT_EQ(c.jump, 1);
-  EXPECT_STREQ(DeviceFilter::ToString(V::kJump), "implausible jump");
+  EXPECT_EQ(c.lost, 0);
+  EXPECT_EQ(c.rejected(), 10);
+  EXPECT_STREQ(DeviceFilter::ToString(V::kWorkspace), "position outside the device workspace");
+  EXPECT_STREQ(DeviceFilter::ToString(V::kStaleSession), "stale session (taken over)");
+}
+
+TEST(DeviceFilterTest, JumpsAreJudgedOnTheServersClockNotTheClients) {
+  DeviceFilter f;
+  int64_t now = 1000 * ms;
+  ASSERT_EQ(f.Check(State(1, 1), now), V::kNewSession);
+  // The client's clock jumps a second ahead: the 5 cm jump 1 ms later (server) is still one.
+  DeviceReading m = State(1, 2, 0.05);
+  m.utime += 1'000'000;
+  EXPECT_EQ(f.Check(m, now + ms), V::kJump);
+  // After a real silence (server clock) the new position is accepted.
+  EXPECT_EQ(f.Check(State(1, 3, 0.05), now + 300 * ms), V::kAccepted);
+}
+
+TEST(DeviceFilterTest, TheFirstStateOfASessionMustBeSaneToo) {
+  DeviceFilter f;
+  // A session opening at 1e308 m neither starts nor claims the device.
+  EXPECT_EQ(f.Check(State(5, 1, 1e308, /*device=*/3), 0), V::kWorkspace);
+  EXPECT_EQ(f.counts().sessions, 0);
+  EXPECT_EQ(f.Check(State(6, 1, 0.0, /*device=*/4), ms), V::kNewSession);
+  EXPECT_EQ(f.Check(State(5, 2, 0.0, /*device=*/3), 2 * ms), V::kDeviceId);  // 4 owns it now
+}
+
+TEST(DeviceFilterTest, ANewSessionTakesOverAndTheOldOneIsStale) {
+  DeviceFilter f;
+  int64_t now = 0;
+  for (int k = 1; k <= 100; ++k) {
+    ASSERT_EQ(f.Check(State(11, k), now += ms), k == 1 ? V::kNewSession : V::kAccepted);
+  }
+  // A restarted client: a new nonce, seq from 1, taken at once.
+  EXPECT_EQ(f.Check(State(22, 1), now += ms), V::kNewSession);
+  EXPECT_EQ(f.session_index(), 2);
+  EXPECT_EQ(f.Check(State(22, 2), now += ms), V::kAccepted);
+  // The old session's states (still in flight, or a second client with the same device id)
+  // are stale and never change the scene, however high their seq.
+  EXPECT_EQ(f.Check(State(11, 101), now += ms), V::kStaleSession);
+  EXPECT_EQ(f.Check(State(11, 5000), now += ms), V::kStaleSession);
+  EXPECT_EQ(f.Check(State(22, 3), now += ms), V::kAccepted);
+  // Another device id is never served.
+  EXPECT_EQ(f.Check(State(33, 1, 0.0, /*device=*/8), now += ms), V::kDeviceId);
+  const DeviceFilterCounts& c = f.counts();
+  EXPECT_EQ(c.sessions, 2);
+  EXPECT_EQ(c.session, 2);
+  EXPECT_EQ(c.device, 1);
+  EXPECT_EQ(c.accepted, 103);
+}
+
+TEST(DeviceFilterTest, AConfiguredDeviceIdIsTheOnlyOneServed) {
+  DeviceFilterOptions o;
+  o.device_id = 42;
+  DeviceFilter f(o);
+  EXPECT_EQ(f.Check(State(1, 1, 0.0, 7), 0), V::kDeviceId);
+  EXPECT_EQ(f.Check(State(2, 1, 0.0, 42), ms), V::kNewSession);
+}
+
+TEST(DeviceFilterTest, GapsInTheServedSessionAreCountedAsLost) {
+  DeviceFilter f;
+  int64_t now = 0;
+  ASSERT_EQ(f.Check(State(1, 1), now += ms), V::kNewSession);
+  ASSERT_EQ(f.Check(State(1, 2), now += ms), V::kAccepted);
+  ASSERT_EQ(f.Check(State(1, 6), now += ms), V::kAccepted);  // 3, 4, 5 lost
+  DeviceReading nan = State(1, 7);
+  nan.position[0] = NAN;
+  ASSERT_EQ(f.Check(nan, now += ms), V::kNonFinite);          // received: not lost
+  ASSERT_EQ(f.Check(State(1, 10), now += ms), V::kAccepted);  // 8, 9 lost
+  ASSERT_EQ(f.Check(State(1, 4), now += ms), V::kSequence);   // late, not a gap
+  // Another session's gaps are not the served session's.
+  ASSERT_EQ(f.Check(State(1, 100, 0.0, 9), now += ms), V::kDeviceId);
+  EXPECT_EQ(f.counts().lost, 5);
 }
 
 }  // namespace

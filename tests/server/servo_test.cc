@@ -145,13 +145,29 @@ TEST(ServoTest, DeviceTimeoutRampsTheForceToZeroAndHoldsTheScene) {
       Eigen::Vector3d(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]).norm();
   EXPECT_GT(pulled, 0.5);
   const Eigen::VectorXd held = servo.q();
-  // The device goes silent: the same (stale) sample from now on.
+  // The device goes silent: the same (stale) sample from now on. Until the timeout nothing is
+  // sent; then one timeout wrench per device period, echoing the last state answered, ramping
+  // down continuously, until a last one at zero.
+  double previous = pulled;
+  int timeout_wrenches = 0, zero_wrenches = 0;
   for (int k = 0; k < 2000; ++k) {
     servo.Tick(&s, now, &r);
     now += 1'000'000;
     EXPECT_EQ(r.timed_out, k >= 100) << k;  // timeout 0.1 s
-    EXPECT_FALSE(r.answered);               // a stale sample is never answered again
+    EXPECT_EQ(r.answered, k >= 100 && zero_wrenches == 0) << k;
+    if (!r.answered) continue;
+    ++timeout_wrenches;
+    EXPECT_EQ(r.wrench.state, kTimeout);
+    EXPECT_EQ(r.wrench.seq, s.seq);
+    const double f =
+        Eigen::Vector3d(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]).norm();
+    EXPECT_LE(f, previous + 1e-12);
+    EXPECT_LE(previous - f, scene->device.max_force_rate * 1e-3 + 1e-12);
+    previous = f;
+    zero_wrenches += f == 0.0;
   }
+  EXPECT_EQ(zero_wrenches, 1);
+  EXPECT_GE(timeout_wrenches, 900);            // the 1 s ramp, one per millisecond
   EXPECT_LT((servo.q() - held).norm(), 1e-6);  // the scene holds
   // A new device state after the silence: answered, ramping up from zero.
   s = Sample(++seq, Eigen::Vector3d(0, 5 * mm, 0), now);
