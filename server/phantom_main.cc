@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <thread>
 #include <vector>
@@ -50,13 +51,16 @@ struct LatestWrench {
   double torque[3] = {0, 0, 0};
   int64_t seq = -1;
   int state = 0;
+  int64_t received_ns = 0;  ///< this process's clock
 };
 
 struct Receiver {
   tangent::server::Seqlock<LatestWrench> wrench;
   std::vector<double> latency_us, ping_us;
   std::vector<int64_t> answered_seq;
-  int64_t late = 0, bad = 0;
+  int64_t late = 0, bad = 0, foreign = 0, timeout_wrenches = 0, fault_wrenches = 0;
+  std::atomic<int64_t> first_answer_ns{0};
+  int64_t device_id = 1, session = 0;
   double late_threshold_us = 1000.0;
   // Loop statistics from tangentd (for the status line).
   std::atomic<double> loop_rate{0.0};
@@ -64,21 +68,35 @@ struct Receiver {
   std::atomic<double> violation{0.0};
 
   void OnWrench(const lcm::ReceiveBuffer*, const std::string&, const tangent::wrench_t* m) {
-    const double lat = 1e-3 * static_cast<double>(NowNs() / 1000 * 1000 - m->utime * 1000);
-    latency_us.push_back(lat);
-    if (lat > late_threshold_us) ++late;
-    answered_seq.push_back(m->seq);
+    // Only the wrenches of this client's own session (another client's, or a previous run's
+    // still in flight, are not for this device).
+    if (m->device_id != device_id || m->session != session) {
+      ++foreign;
+      return;
+    }
+    const int64_t now = NowNs();
     bool finite = true;
     for (int i = 0; i < 3; ++i) finite = finite && std::isfinite(m->force[i]);
     if (!finite) {
       ++bad;
       return;
     }
+    if (m->state == 2) {
+      ++timeout_wrenches;  // the server heard nothing from us: not an answer
+    } else {
+      if (m->state == 3) ++fault_wrenches;
+      const double lat = 1e-3 * static_cast<double>(now / 1000 * 1000 - m->utime * 1000);
+      latency_us.push_back(lat);
+      if (lat > late_threshold_us) ++late;
+      answered_seq.push_back(m->seq);
+      if (first_answer_ns.load() == 0) first_answer_ns.store(now);
+    }
     LatestWrench w;
     std::memcpy(w.force, m->force, sizeof(w.force));
     std::memcpy(w.torque, m->torque, sizeof(w.torque));
     w.seq = m->seq;
     w.state = m->state;
+    w.received_ns = now;
     wrench.Write(w);
   }
   void OnPong(const lcm::ReceiveBuffer* rbuf, const std::string&) {
@@ -104,6 +122,8 @@ int main(int argc, char** argv) {
   std::string ping_ch = "TANGENT_PING", pong_ch = "TANGENT_PONG";
   double duration = 10.0, rate = 1000.0, ping_rate = 100.0, coupling_stiffness = 300.0;
   double silence_at = -1.0, silence_for = 0.0;
+  double watchdog_ms = 20.0, watchdog_rate = 500.0;
+  int64_t device_id = 1, session = 0;
   int inject_bad = 0;
   bool status = false;
   tangent::server::DeviceModelOptions dm;
@@ -120,7 +140,16 @@ int main(int argc, char** argv) {
   app.add_option("--silence-for", silence_for, "... for this long (s)");
   app.add_option(
       "--inject-bad", inject_bad,
-      "every N-th message is bad (NaN, non-unit quaternion, repeated seq, jump in turn)");
+      "every N-th message is bad (NaN, non-unit quaternion, repeated seq, jump, outside the "
+      "workspace in turn)");
+  app.add_option("--device-id", device_id, "this device's id (device_state_t.device_id)");
+  app.add_option("--session", session,
+                 "session nonce (default: drawn at random at start; a new one takes over)");
+  app.add_option("--watchdog-ms", watchdog_ms,
+                 "no wrench for this long: the device ramps its own force to zero, ms")
+      ->check(CLI::Range(1.0, 10000.0));
+  app.add_option("--watchdog-rate", watchdog_rate, "... at this rate, N/s")
+      ->check(CLI::Range(1.0, 1e6));
   app.add_option("--device-channel", device_ch);
   app.add_option("--wrench-channel", wrench_ch);
   app.add_option("--stats-channel", stats_ch);
@@ -155,7 +184,13 @@ int main(int argc, char** argv) {
   }
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
+  if (session == 0) {
+    std::random_device entropy;  // a nonce, not a simulation input: deliberately unseeded
+    session = static_cast<int64_t>((static_cast<uint64_t>(entropy()) << 32) | entropy());
+  }
   Receiver rx;
+  rx.device_id = device_id;
+  rx.session = session;
   rx.late_threshold_us = 1e6 / rate;
   rx.latency_us.reserve(static_cast<size_t>(duration * rate * 1.1) + 16);
   rx.answered_seq.reserve(rx.latency_us.capacity());
@@ -180,6 +215,10 @@ int main(int argc, char** argv) {
   forces.reserve(static_cast<size_t>(duration * rate) + 16);
   tangent::device_state_t msg{};
   Eigen::Vector3d prev_hand = hand.At(0.0);
+  Eigen::Vector3d rendered = Eigen::Vector3d::Zero();
+  const int64_t watchdog_ns = static_cast<int64_t>(watchdog_ms * 1e6);
+  bool was_starved = false;
+  int64_t watchdog_trips = 0;
   for (int64_t k = 0; !g_stop.load(); ++k) {
     next += period;
     // Sleep then spin to the deadline (timer slack 1 ns).
@@ -190,15 +229,31 @@ int main(int argc, char** argv) {
     if (t >= duration) break;
     LatestWrench w;
     rx.wrench.Read(&w);
+    // What a device driver must do (docs/server.md): render the last wrench while wrenches
+    // keep coming; when none has come for the watchdog time, ramp the force to zero by itself.
+    const int64_t now_ns = NowNs();
+    const bool starved = now_ns - std::max(w.received_ns, start) > watchdog_ns;
+    if (starved && !was_starved) ++watchdog_trips;
+    was_starved = starved;
+    const Eigen::Vector3d commanded =
+        starved ? Eigen::Vector3d::Zero() : Eigen::Vector3d(w.force[0], w.force[1], w.force[2]);
+    if (starved) {
+      const Eigen::Vector3d step = commanded - rendered;
+      const double max_step = watchdog_rate * dt;
+      rendered += step.norm() > max_step ? Eigen::Vector3d(step * (max_step / step.norm())) : step;
+    } else {
+      rendered = commanded;
+    }
     const Eigen::Vector3d target = hand.At(t);
     const Eigen::Vector3d hand_v = (target - prev_hand) / dt;
     prev_hand = target;
-    const Eigen::Vector3d f =
-        device.Step(dt, target, hand_v, Eigen::Vector3d(w.force[0], w.force[1], w.force[2]));
+    const Eigen::Vector3d f = device.Step(dt, target, hand_v, rendered);
     forces.push_back(f);
     const bool silent = silence_at >= 0 && t >= silence_at && t < silence_at + silence_for;
     if (!silent) {
       msg.utime = NowNs() / 1000;
+      msg.device_id = device_id;
+      msg.session = session;
       msg.seq = ++seq;
       for (int i = 0; i < 3; ++i) {
         msg.position[i] = device.position()[i];
@@ -208,7 +263,7 @@ int main(int argc, char** argv) {
       msg.orientation[1] = msg.orientation[2] = msg.orientation[3] = 0.0;
       msg.buttons = 1;
       if (inject_bad > 0 && seq % inject_bad == 0) {
-        switch ((seq / inject_bad) % 4) {
+        switch ((seq / inject_bad) % 5) {
           case 0:
             msg.position[0] = NAN;
             break;
@@ -219,7 +274,10 @@ int main(int argc, char** argv) {
             msg.seq = seq - 1;
             break;
           case 3:
-            msg.position[1] += 0.5;
+            msg.position[1] += 0.03;  // 3 cm in a millisecond, inside the workspace
+            break;
+          case 4:
+            msg.position[1] += 0.5;  // outside the workspace
             break;
         }
       } else {
@@ -271,6 +329,13 @@ int main(int argc, char** argv) {
               static_cast<long long>(sent), static_cast<long long>(answered),
               static_cast<long long>(lost), static_cast<long long>(rx.late),
               static_cast<long long>(rx.bad));
+  const int64_t first = rx.first_answer_ns.load();
+  std::printf(
+      "session=%lld\nfirst_answer_ms=%.3f\ntimeout_wrenches=%lld\nfault_wrenches=%lld\n"
+      "foreign_wrenches=%lld\nwatchdog_trips=%lld\n",
+      static_cast<long long>(session), first > 0 ? 1e-6 * static_cast<double>(first - start) : -1.0,
+      static_cast<long long>(rx.timeout_wrenches), static_cast<long long>(rx.fault_wrenches),
+      static_cast<long long>(rx.foreign), static_cast<long long>(watchdog_trips));
   std::printf(
       "latency_p50_us=%.1f\nlatency_p99_us=%.1f\nlatency_p999_us=%.1f\nlatency_max_us=%.1f\n",
       lat.p50, lat.p99, lat.p999, lat.max);

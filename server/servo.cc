@@ -428,9 +428,10 @@ void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out
       torque = dv.rotation.transpose() * gp.R *
                contact::TorqueFromQuaternionForce(gp.q.tail<4>(), dE_dQ);
     }
-    // A force or torque whose square overflows is absurd (the workspace bounds the error to
-    // metres, so k·error is at most ~1e4 N): a fault like a non-finite one.
-    if (!std::isfinite(force.squaredNorm()) || !std::isfinite(torque.squaredNorm())) {
+    // A force beyond fault_force_factor × max_force (or one whose square overflows) is absurd:
+    // a fault like a non-finite one.
+    const double absurd = options_.fault_force_factor * dv.max_force;
+    if (!(force.squaredNorm() <= absurd * absurd) || !std::isfinite(torque.squaredNorm())) {
       fault = true;
       out->fault = true;
       ramp_ = 0.0;

@@ -100,6 +100,10 @@ struct ServoOptions {
   /// A body farther than this from the world origin is a fault, m: a desk device's workspace
   /// times any sensible scale is metres; beyond this a part has been thrown away.
   double fault_distance = 100.0;
+  /// A coupling force above this many times the device's saturation is a fault: the workspace
+  /// bounds the coupling's spring term (k · 0.2 m ≈ 60 N at 300 N/m) and a 10 cm jump's damping
+  /// term is ≈ 100 N, so only a broken state reaches a thousand times 3.3 N.
+  double fault_force_factor = 1e3;
 };
 
 /// Test hooks: a one-shot value injected into one stage of the next tick, to show that a
