@@ -296,8 +296,9 @@ void Engine::ServoThread() {
         next = end + period;
       }
     }
-    if ((counters.ticks & 255) == 0 || result.fault || result.new_session)
-      counters_.Write(counters);
+    // Every tick (a ~200-byte copy, after the tick's timing): the statistics then agree with
+    // the bridge's own counts (answers, unanswered, accepted) to within the states in flight.
+    counters_.Write(counters);
   }
   counters_.Write(counters);
 }

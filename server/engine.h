@@ -59,7 +59,7 @@ class DurationHistogram {
   std::atomic<double> max_{0.0};
 };
 
-/// Counters the servo publishes every 256 ticks (Seqlock), plus the last wrench's size. Window
+/// Counters the servo publishes every tick (Seqlock), plus the last wrench's size. Window
 /// maxima since the bridge's last statistics message are kept apart (Engine::TakeWindowMax).
 struct LoopCounters {
   int64_t ticks = 0;

@@ -240,6 +240,14 @@ bool ServoLoop::Follow(const DeviceSample& d, double dt) {
   const double max_step = dv.follow_speed * dv.scale * h;
   const double n = step.norm();
   target_ += n > max_step ? step * (max_step / n) : step;
+  // The coupling saturates at max_force for the hand, so the scene is never pulled harder
+  // either: the target stays within the saturation distance max_force / k of the grasp point
+  // (a saturated virtual coupling; a hand 10 cm away drags the parts with 3.3 N, not 30 N).
+  const Eigen::Vector3d p_WG = GraspPoint();
+  const Eigen::Vector3d reach = target_ - p_WG;
+  const double max_reach = dv.scale * dv.max_force / dv.stiffness;
+  const double r = reach.norm();
+  if (r > max_reach) target_ = p_WG + reach * (max_reach / r);
   if (grasp_orientation_) {
     const Eigen::Quaterniond Q_DT(d.orientation[0], d.orientation[1], d.orientation[2],
                                   d.orientation[3]);

@@ -109,6 +109,22 @@ TEST(SceneTest, BadScenesNameTheProblem) {
   EXPECT_NE(Error(Scene(kBody, grasp + R"(, "device": {"stiffness": 800, "damping": 1})"))
                 .find("device.stiffness: exceeds the device's rated stiffness 500 N/m"),
             std::string::npos);
+  // The device's workspace box (device frame, m) and follow speed.
+  EXPECT_NE(Error(Scene(kBody, grasp + R"(, "device": {"workspace": {"min": [0.01, -0.1, -0.1],
+                                                           "max": [0.1, 0.1, 0.1]}})"))
+                .find("device.workspace: must contain the device origin strictly (min < 0 < max on "
+                      "each axis), got min 0.01, max 0.1 on axis 0"),
+            std::string::npos);
+  EXPECT_NE(Error(Scene(kBody, grasp + R"(, "device": {"workspace": {"min": [-100, -1, -1],
+                                                                     "max": [100, 1, 1]}})"))
+                .find("device.workspace: is more than 10 m wide on axis 0"),
+            std::string::npos);
+  EXPECT_NE(Error(Scene(kBody, grasp + R"(, "device": {"workspace": {"min": [-1, -1, -1]}})"))
+                .find("device.workspace: missing \"max\""),
+            std::string::npos);
+  EXPECT_NE(Error(Scene(kBody, grasp + R"(, "device": {"follow_speed": 0})"))
+                .find("device.follow_speed: must be positive, got 0"),
+            std::string::npos);
   EXPECT_NE(LoadSceneError("/nonexistent/scene.json").find("cannot open the scene file"),
             std::string::npos);
 }

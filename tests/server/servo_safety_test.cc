@@ -169,7 +169,7 @@ TEST(ServoSafetyTest, AJumpIsFollowedAtBoundedSpeedAndTheSceneStaysExact) {
     // 9 cm in one state (inside the workspace), held for 0.3 s.
     const Eigen::Vector3d far(0.09, 0, 0);
     Eigen::Vector3d target = rig.servo->GraspTarget();
-    double worst_target_step = 0.0;
+    double worst_target_step = 0.0, worst_reach = 0.0;
     for (int k = 0; k < 300; ++k) {
       const DeviceSample s = rig.State(far);
       for (int t = 0; t < kTicksPerState; ++t) {
@@ -180,6 +180,7 @@ TEST(ServoSafetyTest, AJumpIsFollowedAtBoundedSpeedAndTheSceneStaysExact) {
         const Eigen::Vector3d next = rig.servo->GraspTarget();
         worst_target_step = std::max(worst_target_step, (next - target).norm());
         target = next;
+        worst_reach = std::max(worst_reach, (next - rig.servo->GraspPoint()).norm());
       }
     }
     const double allowed = rig.scene->device.follow_speed * rig.scene->device.scale * 1e-9 *
@@ -190,6 +191,14 @@ TEST(ServoSafetyTest, AJumpIsFollowedAtBoundedSpeedAndTheSceneStaysExact) {
         scene, worst_target_step, allowed, rig.worst_violation, rig.max_force,
         rig.worst_step_excess);
     EXPECT_LE(worst_target_step, allowed * (1 + 1e-9));
+    // A saturated coupling for the scene too: the target never leads the grasp point by more
+    // than max_force / k (the parts are pulled with at most what the hand feels). Measured after
+    // the solve, so the grasp may have moved by its step in that tick.
+    const double reach =
+        rig.scene->device.scale * rig.scene->device.max_force / rig.scene->device.stiffness;
+    std::printf("%s: target ahead of the grasp point by at most %.3e m (saturation %.3e m)\n",
+                scene, worst_reach, reach);
+    EXPECT_LE(worst_reach, reach + allowed);
     EXPECT_LE(rig.worst_violation, 1e-6);
     EXPECT_EQ(rig.faults, 0);
     EXPECT_LE(rig.worst_step_excess, 1e-9);
