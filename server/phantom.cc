@@ -143,4 +143,28 @@ double ForceRoughness(const std::vector<Eigen::Vector3d>& f) {
   return std::sqrt(s / static_cast<double>(f.size() - 2));
 }
 
+DriverWatchdog::DriverWatchdog(double timeout, double rate) : timeout_(timeout), rate_(rate) {
+  if (!(timeout > 0.0)) {
+    throw std::invalid_argument("watchdog: the timeout must be positive, got " +
+                                std::to_string(timeout));
+  }
+  if (!(rate > 0.0)) {
+    throw std::invalid_argument("watchdog: the force rate must be positive, got " +
+                                std::to_string(rate));
+  }
+}
+
+Eigen::Vector3d DriverWatchdog::Step(double t, double dt, const Eigen::Vector3d& wrench,
+                                     double received) {
+  const bool starved = received < 0.0 || t - received > timeout_;
+  if (starved && !starved_ && received >= 0.0) ++trips_;
+  starved_ = starved;
+  const Eigen::Vector3d goal = starved || !wrench.allFinite() ? Eigen::Vector3d::Zero() : wrench;
+  const Eigen::Vector3d step = goal - rendered_;
+  const double max_step = rate_ * dt;
+  const double n = step.norm();
+  rendered_ += n > max_step ? Eigen::Vector3d(step * (max_step / n)) : step;
+  return rendered_;
+}
+
 }  // namespace tangent::server

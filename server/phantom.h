@@ -60,6 +60,29 @@ class DeviceModel {
   double energy_ = 0.0, max_force_ = 0.0;
 };
 
+/// What a device driver does with the wrenches it receives (docs/server.md, "What a device
+/// driver must do"): it renders the latest wrench while wrenches keep coming; when none has come
+/// for `timeout` it ramps the rendered force to zero by itself; and it never changes the
+/// rendered force faster than `rate`, so a resumed stream ramps back too.
+class DriverWatchdog {
+ public:
+  /// @param timeout s without a wrench before the driver acts (> 0)
+  /// @param rate N/s, the driver's own force-rate limit (> 0)
+  /// @throws std::invalid_argument naming the bad value.
+  DriverWatchdog(double timeout, double rate);
+  /// The force to render at time t (s) after a device step of dt (s): `wrench` is the latest
+  /// wrench's force (N), received at `received` (s; negative: none yet).
+  Eigen::Vector3d Step(double t, double dt, const Eigen::Vector3d& wrench, double received);
+  int64_t trips() const { return trips_; }  ///< times the watchdog fired
+  bool starved() const { return starved_; }
+
+ private:
+  double timeout_, rate_;
+  Eigen::Vector3d rendered_ = Eigen::Vector3d::Zero();
+  bool starved_ = false;
+  int64_t trips_ = 0;
+};
+
 /// Percentiles of a sample (sorted copy).
 struct Percentiles {
   double p50 = 0, p99 = 0, p999 = 0, max = 0;

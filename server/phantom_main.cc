@@ -215,10 +215,7 @@ int main(int argc, char** argv) {
   forces.reserve(static_cast<size_t>(duration * rate) + 16);
   tangent::device_state_t msg{};
   Eigen::Vector3d prev_hand = hand.At(0.0);
-  Eigen::Vector3d rendered = Eigen::Vector3d::Zero();
-  const int64_t watchdog_ns = static_cast<int64_t>(watchdog_ms * 1e6);
-  bool was_starved = false;
-  int64_t watchdog_trips = 0;
+  tangent::server::DriverWatchdog watchdog(1e-3 * watchdog_ms, watchdog_rate);
   for (int64_t k = 0; !g_stop.load(); ++k) {
     next += period;
     // Sleep then spin to the deadline (timer slack 1 ns).
@@ -231,19 +228,9 @@ int main(int argc, char** argv) {
     rx.wrench.Read(&w);
     // What a device driver must do (docs/server.md): render the last wrench while wrenches
     // keep coming; when none has come for the watchdog time, ramp the force to zero by itself.
-    const int64_t now_ns = NowNs();
-    const bool starved = now_ns - std::max(w.received_ns, start) > watchdog_ns;
-    if (starved && !was_starved) ++watchdog_trips;
-    was_starved = starved;
-    const Eigen::Vector3d commanded =
-        starved ? Eigen::Vector3d::Zero() : Eigen::Vector3d(w.force[0], w.force[1], w.force[2]);
-    if (starved) {
-      const Eigen::Vector3d step = commanded - rendered;
-      const double max_step = watchdog_rate * dt;
-      rendered += step.norm() > max_step ? Eigen::Vector3d(step * (max_step / step.norm())) : step;
-    } else {
-      rendered = commanded;
-    }
+    const Eigen::Vector3d rendered =
+        watchdog.Step(t, dt, Eigen::Vector3d(w.force[0], w.force[1], w.force[2]),
+                      w.received_ns > 0 ? 1e-9 * static_cast<double>(w.received_ns - start) : -1.0);
     const Eigen::Vector3d target = hand.At(t);
     const Eigen::Vector3d hand_v = (target - prev_hand) / dt;
     prev_hand = target;
@@ -335,7 +322,7 @@ int main(int argc, char** argv) {
       "foreign_wrenches=%lld\nwatchdog_trips=%lld\n",
       static_cast<long long>(session), first > 0 ? 1e-6 * static_cast<double>(first - start) : -1.0,
       static_cast<long long>(rx.timeout_wrenches), static_cast<long long>(rx.fault_wrenches),
-      static_cast<long long>(rx.foreign), static_cast<long long>(watchdog_trips));
+      static_cast<long long>(rx.foreign), static_cast<long long>(watchdog.trips()));
   std::printf(
       "latency_p50_us=%.1f\nlatency_p99_us=%.1f\nlatency_p999_us=%.1f\nlatency_max_us=%.1f\n",
       lat.p50, lat.p99, lat.p999, lat.max);

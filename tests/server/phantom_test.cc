@@ -62,5 +62,46 @@ TEST(PhantomTest, DeviceSaturatesStaysInItsWorkspaceAndCountsEnergy) {
   EXPECT_NEAR(w.position().x(), o.workspace.x(), 1e-12);
 }
 
+TEST(PhantomTest, TheDriverWatchdogRampsTheForceToZeroWhenWrenchesStop) {
+  DriverWatchdog dog(0.02, 500.0);  // 20 ms, 500 N/s
+  const double dt = 1e-3;
+  const Eigen::Vector3d f(0, 2.0, 0);
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();
+  // Wrenches every ms until t = 0.1 s: rendered as they come (after the first 4 ms' ramp from 0).
+  for (int k = 0; k <= 100; ++k) r = dog.Step(k * dt, dt, f, k * dt);
+  EXPECT_EQ(r, f);
+  EXPECT_EQ(dog.trips(), 0);
+  // None after that: held for the watchdog time, then down at 0.5 N per ms, to zero.
+  double previous = r.norm();
+  int steps_down = 0;
+  for (int k = 101; k <= 200; ++k) {
+    r = dog.Step(k * dt, dt, f, 0.1);
+    if (k * dt <= 0.12 + 1e-12) {
+      EXPECT_EQ(r, f) << k;
+    }
+    EXPECT_LE(previous - r.norm(), 0.5 + 1e-12);
+    steps_down += r.norm() < previous;
+    previous = r.norm();
+  }
+  EXPECT_EQ(r.norm(), 0.0);
+  EXPECT_EQ(steps_down, 4);  // 2 N at 0.5 N per step
+  EXPECT_EQ(dog.trips(), 1);
+  EXPECT_TRUE(dog.starved());
+  // Wrenches again: rendering resumes, ramping up at the same rate (no step at the hand).
+  r = dog.Step(0.3, dt, f, 0.3);
+  EXPECT_NEAR(r.norm(), 0.5, 1e-12);
+  EXPECT_FALSE(dog.starved());
+  // A non-finite wrench is never rendered.
+  r = dog.Step(0.301, dt, Eigen::Vector3d(NAN, 0, 0), 0.301);
+  EXPECT_TRUE(r.allFinite());
+  EXPECT_THROW(DriverWatchdog(0.0, 1.0), std::invalid_argument);
+  try {
+    DriverWatchdog(0.02, -1.0);
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("watchdog: the force rate must be positive, got -1"),
+              std::string::npos);
+  }
+}
+
 }  // namespace
 }  // namespace tangent::server
