@@ -402,6 +402,25 @@ void ExpectOnly(const Delta& d, int64_t non_finite, int64_t quaternion, int64_t 
   EXPECT_EQ(d.timeouts, 0);
 }
 
+/// For 1 s at 1 kHz, every `every`-th state of the served client is corrupted by `corrupt(k, m)`
+/// in place of a good one; returns the counters' movement and sets *injected.
+Delta Corrupted(const char* what, int every,
+                const std::function<void(int64_t, tangent::device_state_t*)>& corrupt,
+                int64_t* injected) {
+  Harness& h = *g_h;
+  *injected = 0;
+  return Attack(what, [&] {
+    h.Drive(1.0, 1000.0, [&](int64_t k) {
+      tangent::device_state_t m = h.State(h.session, h.facts().pull);
+      if (k % every == every / 2) {
+        corrupt(k, &m);
+        ++*injected;
+      }
+      h.Publish(m);
+    });
+  });
+}
+
 TEST(Adversary, A00_BaselineClientIsServed) {
   Harness& h = *g_h;
   const size_t from = h.WrenchCount();
@@ -449,47 +468,37 @@ TEST(Adversary, A01_UndecodableAndWrongTypePackets) {
 }
 
 TEST(Adversary, A02_NonFiniteFields) {
-  Harness& h = *g_h;
   int64_t injected = 0;
-  const Delta d = Attack("non-finite fields", [&] {
-    h.Drive(1.0, 1000.0, [&](int64_t k) {
-      tangent::device_state_t m = h.State(h.session, h.facts().pull);
-      if (k % 10 == 3) {
+  const Delta d = Corrupted(
+      "non-finite fields", 10,
+      [](int64_t k, tangent::device_state_t* m) {
         const double bad[] = {NAN, INFINITY, -INFINITY};
         const double x = bad[(k / 10) % 3];
         switch ((k / 30) % 3) {
           case 0:
-            m.position[k % 3] = x;
+            m->position[k % 3] = x;
             break;
           case 1:
-            m.orientation[k % 4] = x;
+            m->orientation[k % 4] = x;
             break;
           case 2:
-            m.velocity[k % 3] = x;
+            m->velocity[k % 3] = x;
             break;
         }
-        ++injected;
-      }
-      h.Publish(m);
-    });
-  });
+      },
+      &injected);
   ExpectOnly(d, injected, 0, 0, 0, 0);
 }
 
 TEST(Adversary, A03_NonUnitQuaternions) {
-  Harness& h = *g_h;
   int64_t injected = 0;
-  const Delta d = Attack("non-unit quaternions", [&] {
-    h.Drive(1.0, 1000.0, [&](int64_t k) {
-      tangent::device_state_t m = h.State(h.session, h.facts().pull);
-      if (k % 10 == 4) {
+  const Delta d = Corrupted(
+      "non-unit quaternions", 10,
+      [](int64_t k, tangent::device_state_t* m) {
         const double scale[] = {0.0, 0.5, 1.01, 1e300};
-        for (double& q : m.orientation) q *= scale[(k / 10) % 4];
-        ++injected;
-      }
-      h.Publish(m);
-    });
-  });
+        for (double& q : m->orientation) q *= scale[(k / 10) % 4];
+      },
+      &injected);
   ExpectOnly(d, 0, injected, 0, 0, 0);
 }
 
@@ -511,19 +520,14 @@ TEST(Adversary, A04_RepeatedAndStaleSequenceNumbers) {
 }
 
 TEST(Adversary, A05_HugeAndFarPositions) {
-  Harness& h = *g_h;
   int64_t injected = 0;
-  const Delta d = Attack("huge and far positions", [&] {
-    h.Drive(1.0, 1000.0, [&](int64_t k) {
-      tangent::device_state_t m = h.State(h.session, h.facts().pull);
-      if (k % 10 == 7) {
+  const Delta d = Corrupted(
+      "huge and far positions", 10,
+      [](int64_t k, tangent::device_state_t* m) {
         const double far[] = {1e308, -1e308, 1e9, -1e9, 1.0, 0.5};
-        m.position[k % 3] = far[(k / 10) % 6];
-        ++injected;
-      }
-      h.Publish(m);
-    });
-  });
+        m->position[k % 3] = far[(k / 10) % 6];
+      },
+      &injected);
   ExpectOnly(d, 0, 0, injected, 0, 0);
 }
 
@@ -573,18 +577,11 @@ TEST(Adversary, A06_ASessionOpeningFarAwayIsRejectedThenServed) {
 }
 
 TEST(Adversary, A07_SingleSampleGlitches) {
-  Harness& h = *g_h;
   int64_t injected = 0;
-  const Delta d = Attack("single-sample 3 cm glitches", [&] {
-    h.Drive(1.0, 1000.0, [&](int64_t k) {
-      tangent::device_state_t m = h.State(h.session, h.facts().pull);
-      if (k % 20 == 9) {
-        m.position[1] += 0.03;  // inside the workspace, 30 m/s
-        ++injected;
-      }
-      h.Publish(m);
-    });
-  });
+  const Delta d = Corrupted(
+      "single-sample 3 cm glitches", 20,
+      [](int64_t, tangent::device_state_t* m) { m->position[1] += 0.03; },  // 30 m/s, inside
+      &injected);
   ExpectOnly(d, 0, 0, 0, 0, injected);
 }
 
