@@ -66,10 +66,9 @@ void BernsteinValues(int p, double s, double b[kMaxOrder + 1][kMaxDegree + 1]) {
   }
 }
 
-namespace {
-
-// Bernstein-form kernel for degrees above 3: the span holds the Bezier nets of A and of its
-// partials (already in u, v units), so evaluation only contracts with Bernstein values.
+// Bernstein-form kernel for degrees above 3 (and for spans whose power form is not exact): the
+// span holds the Bezier nets of A and of its partials (already in u, v units), so evaluation
+// only contracts with Bernstein values.
 template <int Order>
 void BernsteinKernel(const Eigen::Vector4d* c, int p, int q, double s, double t, double, double,
                      HomogeneousSurfaceDerivs* out) {
@@ -92,6 +91,47 @@ void BernsteinKernel(const Eigen::Vector4d* c, int p, int q, double s, double t,
     c += std::max(nu, 0) * std::max(nv, 0);
   }
 }
+
+template void BernsteinKernel<0>(const Eigen::Vector4d*, int, int, double, double, double, double,
+                                 HomogeneousSurfaceDerivs*);
+template void BernsteinKernel<1>(const Eigen::Vector4d*, int, int, double, double, double, double,
+                                 HomogeneousSurfaceDerivs*);
+template void BernsteinKernel<2>(const Eigen::Vector4d*, int, int, double, double, double, double,
+                                 HomogeneousSurfaceDerivs*);
+
+bool PowerFormIsExact(const Eigen::Vector4d* power, const Eigen::Vector4d* nets, int p, int q,
+                      double inv_hu, double inv_hv, SpanKernel power_kernel) {
+  // Cartesian derivatives per order (S; S_u, S_v; S_uu, S_uv, S_vv), the largest value of each
+  // order over the span and the worst error against it (the relative-per-order measure
+  // docs/nurbs.md states), at a 4 x 4 grid of the span including its edges.
+  HomogeneousSurfaceDerivs ha, hb;
+  SurfacePoint a, b;
+  double scale[3] = {}, error[3] = {};
+  auto track = [&](int k, const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
+    scale[k] = std::max(scale[k], y.norm());
+    error[k] = std::max(error[k], (x - y).norm());
+  };
+  for (double s : {0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0}) {
+    for (double t : {0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0}) {
+      power_kernel(power, p, q, s, t, inv_hu, inv_hv, &ha);
+      BernsteinKernel<kMaxOrder>(nets, p, q, s, t, inv_hu, inv_hv, &hb);
+      RationalQuotient(ha, kMaxOrder, &a);
+      RationalQuotient(hb, kMaxOrder, &b);
+      track(0, a.S, b.S);
+      track(1, a.S_u, b.S_u);
+      track(1, a.S_v, b.S_v);
+      track(2, a.S_uu, b.S_uu);
+      track(2, a.S_uv, b.S_uv);
+      track(2, a.S_vv, b.S_vv);
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (!(error[k] <= kPowerFormTolerance * scale[k])) return false;
+  }
+  return true;
+}
+
+namespace {
 
 template <int Order>
 SpanFormSurface::Kernel SelectKernel(int p, int q) {
@@ -134,37 +174,65 @@ SpanFormSurface::SpanFormSurface(int p, int q, std::vector<double> breaks_u,
   for (size_t j = 0; j < nv; ++j) inv_h_v_.push_back(1.0 / (breaks_v_[j + 1] - breaks_v_[j]));
   power_ = p <= 3 && q <= 3;
   bicubic_ = p == 3 && q == 3;
+  kernels_[0] = internal::SelectKernel<0>(p, q);
+  kernels_[1] = internal::SelectKernel<1>(p, q);
+  kernels_[2] = internal::SelectKernel<2>(p, q);
+  offsets_.resize(nu * nv);
+  net_form_.assign(nu * nv, 1);
   if (!power_) {
     patch_size_ = in_size;
     coeffs_ = nets;
+    for (size_t span = 0; span < nu * nv; ++span) offsets_[span] = span * in_size;
   } else {
     patch_size_ = static_cast<size_t>((p + 1) * (q + 1));
     const Eigen::MatrixXd mu = internal::BezierToPowerMatrix(p);
     const Eigen::MatrixXd mv = internal::BezierToPowerMatrix(q);
-    coeffs_.assign(nu * nv * patch_size_, Eigen::Vector4d::Zero());
     Eigen::MatrixXd b(p + 1, q + 1);
+    std::vector<Eigen::Vector4d> power(patch_size_);
     for (size_t span = 0; span < nu * nv; ++span) {
       const Eigen::Vector4d* net = nets.data() + span * in_size;  // The net of A comes first.
-      Eigen::Vector4d* c = coeffs_.data() + span * patch_size_;
       for (int comp = 0; comp < 4; ++comp) {
         for (int a = 0; a <= p; ++a)
           for (int bb = 0; bb <= q; ++bb) b(a, bb) = net[a * (q + 1) + bb][comp];
-        const Eigen::MatrixXd power = mu * b * mv.transpose();
+        const Eigen::MatrixXd pc = mu * b * mv.transpose();
         for (int a = 0; a <= p; ++a)
-          for (int bb = 0; bb <= q; ++bb) c[a * (q + 1) + bb][comp] = power(a, bb);
+          for (int bb = 0; bb <= q; ++bb)
+            power[static_cast<size_t>(a * (q + 1) + bb)][comp] = pc(a, bb);
+      }
+      offsets_[span] = coeffs_.size();
+      const double ihu = inv_h_u_[span / nv], ihv = inv_h_v_[span % nv];
+      if (internal::PowerFormIsExact(power.data(), net, p, q, ihu, ihv, kernels_[kMaxOrder])) {
+        net_form_[span] = 0;
+        coeffs_.insert(coeffs_.end(), power.begin(), power.end());
+      } else {
+        coeffs_.insert(coeffs_.end(), net, net + in_size);  // a short span: its Bezier nets
       }
     }
   }
-  kernels_[0] = internal::SelectKernel<0>(p, q);
-  kernels_[1] = internal::SelectKernel<1>(p, q);
-  kernels_[2] = internal::SelectKernel<2>(p, q);
   avx2_ = bicubic_ && internal::HasAvx2Fma() && !std::getenv("TANGENT_NO_AVX2");
   if (avx2_) {
     for (int order = 0; order <= kMaxOrder; ++order) {
       kernels_[order] = internal::BicubicKernelAvx2(order);
     }
   }
+  net_kernels_[0] = &internal::BernsteinKernel<0>;
+  net_kernels_[1] = &internal::BernsteinKernel<1>;
+  net_kernels_[2] = &internal::BernsteinKernel<2>;
 }
+
+namespace {
+
+// Cartesian derivatives C, C', C'' of a homogeneous curve piece (the quotient rule).
+template <int Dim>
+void CurveQuotient(const HomogeneousCurveDerivs<Dim>& h, Eigen::Matrix<double, Dim, 1> out[3]) {
+  const double inv_w = 1.0 / h.A[0][Dim];
+  out[0] = h.A[0].template head<Dim>() * inv_w;
+  out[1] = (h.A[1].template head<Dim>() - h.A[1][Dim] * out[0]) * inv_w;
+  out[2] =
+      (h.A[2].template head<Dim>() - 2.0 * h.A[1][Dim] * out[1] - h.A[2][Dim] * out[0]) * inv_w;
+}
+
+}  // namespace
 
 template <int Dim>
 SpanFormCurve<Dim>::SpanFormCurve(int p, std::vector<double> breaks,
@@ -177,40 +245,63 @@ SpanFormCurve<Dim>::SpanFormCurve(int p, std::vector<double> breaks,
   }
   power_ = p <= 3;
   const Eigen::MatrixXd m = internal::BezierToPowerMatrix(p);
+  std::vector<HPoint> power(static_cast<size_t>(p + 1));
   for (size_t i = 0; i < n; ++i) {
     inv_h_.push_back(1.0 / (breaks_[i + 1] - breaks_[i]));
     const HPoint* net = nets.data() + i * in_size;
-    if (!power_) {
-      coeffs_.insert(coeffs_.end(), net, net + in_size);
-      continue;
+    offsets_.push_back(coeffs_.size());
+    net_form_.push_back(1);
+    if (power_) {
+      for (int k = 0; k <= p; ++k) {
+        HPoint c = HPoint::Zero();
+        for (int a = 0; a <= k; ++a) c += m(k, a) * net[a];
+        power[static_cast<size_t>(k)] = c;
+      }
+      // The power form only where it reproduces the Bernstein form (a short span does not:
+      // internal::kPowerFormTolerance), checked at four points per span.
+      double scale[3] = {}, error[3] = {};
+      for (double s : {0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0}) {
+        HomogeneousCurveDerivs<Dim> ha, hb;
+        PowerPiece(power.data(), s, inv_h_.back(), kMaxOrder, &ha);
+        NetPiece(net, s, inv_h_.back(), kMaxOrder, &hb);
+        Eigen::Matrix<double, Dim, 1> a[3], b[3];
+        CurveQuotient<Dim>(ha, a);
+        CurveQuotient<Dim>(hb, b);
+        for (int k = 0; k <= kMaxOrder && k <= p; ++k) {
+          scale[k] = std::max(scale[k], b[k].norm());
+          error[k] = std::max(error[k], (a[k] - b[k]).norm());
+        }
+      }
+      bool exact = true;
+      for (int k = 0; k <= kMaxOrder; ++k) {
+        exact = exact && error[k] <= internal::kPowerFormTolerance * scale[k];
+      }
+      if (exact) {
+        net_form_.back() = 0;
+        coeffs_.insert(coeffs_.end(), power.begin(), power.end());
+        continue;
+      }
     }
-    for (int k = 0; k <= p; ++k) {
-      HPoint c = HPoint::Zero();
-      for (int a = 0; a <= k; ++a) c += m(k, a) * net[a];
-      coeffs_.push_back(c);
-    }
+    coeffs_.insert(coeffs_.end(), net, net + in_size);
   }
 }
 
 template <int Dim>
-void SpanFormCurve<Dim>::Evaluate(double t, int order, int* hint,
+void SpanFormCurve<Dim>::NetPiece(const HPoint* c, double s, double inv_h, int order,
                                   HomogeneousCurveDerivs<Dim>* out) const {
-  const int i = internal::FindInterval(breaks_, t, *hint);
-  *hint = i;
-  const double inv_h = inv_h_[static_cast<size_t>(i)];
-  const double s = std::clamp((t - breaks_[static_cast<size_t>(i)]) * inv_h, 0.0, 1.0);
-  if (!power_) {
-    const HPoint* c = coeffs_.data() + static_cast<size_t>(i * NetPointsPerSpan(p_));
-    double b[kMaxOrder + 1][kMaxDegree + 1];
-    internal::BernsteinValues(p_, s, b);
-    for (int k = 0; k <= order; ++k) {
-      out->A[k].setZero();
-      for (int a = 0; a <= p_ - k; ++a) out->A[k] += b[k][a] * c[a];
-      c += p_ + 1 - k;
-    }
-    return;
+  (void)inv_h;  // (the hodograph nets are in t units already)
+  double b[kMaxOrder + 1][kMaxDegree + 1];
+  internal::BernsteinValues(p_, s, b);
+  for (int k = 0; k <= order; ++k) {
+    out->A[k].setZero();
+    for (int a = 0; a <= p_ - k; ++a) out->A[k] += b[k][a] * c[a];
+    c += p_ + 1 - k;
   }
-  const HPoint* c = coeffs_.data() + static_cast<size_t>(i * (p_ + 1));
+}
+
+template <int Dim>
+void SpanFormCurve<Dim>::PowerPiece(const HPoint* c, double s, double inv_h, int order,
+                                    HomogeneousCurveDerivs<Dim>* out) const {
   HPoint p0 = c[p_];
   HPoint p1 = HPoint::Zero();
   HPoint p2 = HPoint::Zero();
@@ -222,6 +313,21 @@ void SpanFormCurve<Dim>::Evaluate(double t, int order, int* hint,
   out->A[0] = p0;
   if (order >= 1) out->A[1] = p1 * inv_h;
   if (order >= 2) out->A[2] = 2.0 * p2 * inv_h * inv_h;
+}
+
+template <int Dim>
+void SpanFormCurve<Dim>::Evaluate(double t, int order, int* hint,
+                                  HomogeneousCurveDerivs<Dim>* out) const {
+  const int i = internal::FindInterval(breaks_, t, *hint);
+  *hint = i;
+  const double inv_h = inv_h_[static_cast<size_t>(i)];
+  const double s = std::clamp((t - breaks_[static_cast<size_t>(i)]) * inv_h, 0.0, 1.0);
+  const HPoint* c = coeffs_.data() + offsets_[static_cast<size_t>(i)];
+  if (net_form_[static_cast<size_t>(i)]) {
+    NetPiece(c, s, inv_h, order, out);
+  } else {
+    PowerPiece(c, s, inv_h, order, out);
+  }
 }
 
 template class SpanFormCurve<2>;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -31,6 +32,27 @@ void BernsteinValues(int p, double s, double b[kMaxOrder + 1][kMaxDegree + 1]);
 /// M with power coefficient k = Σ_i M(k, i) b_i for a degree-p Bezier polynomial in s ∈ [0, 1]:
 /// M(k, i) = C(p, k) C(k, i) (−1)^(k−i) for i ≤ k, 0 otherwise.
 Eigen::MatrixXd BezierToPowerMatrix(int p);
+
+/// The Bernstein-form kernel: `c` holds the span's Bezier nets of A and its partials.
+template <int Order>
+void BernsteinKernel(const Eigen::Vector4d* c, int p, int q, double s, double t, double inv_hu,
+                     double inv_hv, HomogeneousSurfaceDerivs* out);
+
+/// Relative error a span's power form may have in any derivative family against its Bernstein
+/// form (which builds derivatives from hodograph nets and is well conditioned). Converting to
+/// monomials differences nearly equal Bezier points: the k-th derivative loses about
+/// k log10(H/h) digits on a span h much shorter than the part's size H (measured: S_uu off by
+/// 1.3e-8 at h/H = 1e-3 and by order one at 1e-7). Measured on the Cartesian derivatives, so
+/// the quotient rule's amplification is included; well-spaced spans stay near 1e-14, and 2e-13
+/// leaves a margin of 5 for points between the ones checked against the 1e-12 of
+/// docs/nurbs.md.
+inline constexpr double kPowerFormTolerance = 2e-13;
+
+/// Whether a span's power coefficients reproduce its Bernstein nets to kPowerFormTolerance
+/// (Cartesian derivatives, each order relative to its largest value on the span), checked on a
+/// 4 x 4 grid of the span.
+bool PowerFormIsExact(const Eigen::Vector4d* power, const Eigen::Vector4d* nets, int p, int q,
+                      double inv_hu, double inv_hv, SpanKernel power_kernel);
 
 }  // namespace internal
 
@@ -75,17 +97,25 @@ class SpanFormSurface {
     // Clamp to the span so a parameter outside the domain evaluates the domain edge.
     const double s = std::clamp((u - u0) * inv_hu, 0.0, 1.0);
     const double t = std::clamp((v - v0) * inv_hv, 0.0, 1.0);
-    const Eigen::Vector4d* c =
-        coeffs_.data() + static_cast<size_t>(i * num_spans_v() + j) * patch_size_;
-    if (bicubic_ && !avx2_) {
+    const size_t span = static_cast<size_t>(i * num_spans_v() + j);
+    const Eigen::Vector4d* c = coeffs_.data() + offsets_[span];
+    if (net_form_[span]) {
+      net_kernels_[Order](c, p_, q_, s, t, inv_hu, inv_hv, out);
+    } else if (bicubic_ && !avx2_) {
       internal::SurfaceKernel<3, 3, Order>(c, 3, 3, s, t, inv_hu, inv_hv, out);
     } else {
       kernels_[Order](c, p_, q_, s, t, inv_hu, inv_hv, out);
     }
   }
 
-  /// True when the pieces are held in the power basis (both degrees ≤ 3).
+  /// True when the pieces are held in the power basis (both degrees ≤ 3), except on the spans
+  /// where that form is not exact (net_form_spans()).
   bool uses_power_basis() const { return power_; }
+  /// Spans kept in the Bernstein form although the degrees allow the power form: too short for
+  /// it (kPowerFormTolerance).
+  int net_form_spans() const {
+    return power_ ? static_cast<int>(std::count(net_form_.begin(), net_form_.end(), 1)) : 0;
+  }
   int degree_u() const { return p_; }
   int degree_v() const { return q_; }
   int num_spans_u() const { return static_cast<int>(breaks_u_.size()) - 1; }
@@ -101,10 +131,13 @@ class SpanFormSurface {
   bool avx2_ = false;      // ... unless the CPU has AVX2 + FMA: then the intrinsics kernel.
   size_t patch_size_ = 0;  // (p+1)(q+1) homogeneous coefficients
   std::vector<double> breaks_u_, breaks_v_, inv_h_u_, inv_h_v_;
-  // Per span, C[a][b] at a*(q+1)+b: the coefficient of s^a t^b (power basis) or the Bezier
-  // control point (a, b) (Bernstein form).
+  // Per span from offsets_[span]: C[a][b] at a*(q+1)+b, the coefficient of s^a t^b (power
+  // basis), or (net_form_[span]) the Bezier nets of A and its partials (Bernstein form).
   std::vector<Eigen::Vector4d> coeffs_;
+  std::vector<size_t> offsets_;
+  std::vector<uint8_t> net_form_;
   Kernel kernels_[kMaxOrder + 1] = {nullptr, nullptr, nullptr};
+  Kernel net_kernels_[kMaxOrder + 1] = {nullptr, nullptr, nullptr};
 };
 
 /// The same scheme for a curve with `Dim + 1` homogeneous components.
@@ -120,12 +153,25 @@ class SpanFormCurve {
 
   /// Homogeneous derivatives up to `order` at t (clamped to the domain); `hint` is a span index.
   void Evaluate(double t, int order, int* hint, HomogeneousCurveDerivs<Dim>* out) const;
+  /// Spans kept in the Bernstein form although the degree allows the power form (too short).
+  int net_form_spans() const {
+    return power_ ? static_cast<int>(std::count(net_form_.begin(), net_form_.end(), 1)) : 0;
+  }
 
  private:
+  void PowerPiece(const HPoint* c, double s, double inv_h, int order,
+                  HomogeneousCurveDerivs<Dim>* out) const;
+  void NetPiece(const HPoint* c, double s, double inv_h, int order,
+                HomogeneousCurveDerivs<Dim>* out) const;
+
   int p_ = 0;
   std::vector<double> breaks_, inv_h_;
-  bool power_ = false;          // power basis (degree ≤ 3) or Bernstein form
-  std::vector<HPoint> coeffs_;  // per span: p+1 power coefficients or Bezier points
+  bool power_ = false;  // power basis allowed (degree ≤ 3)
+  // Per span from offsets_[span]: p+1 power coefficients, or (net_form_[span]) the Bezier nets
+  // of A, A' and A''.
+  std::vector<HPoint> coeffs_;
+  std::vector<size_t> offsets_;
+  std::vector<uint8_t> net_form_;
 };
 
 }  // namespace tangent::nurbs
