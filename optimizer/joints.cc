@@ -50,6 +50,53 @@ Attachment Normalized(Attachment at, const char* joint) {
   return at;
 }
 
+// cos of the angle between the two axes, (R_a axis_a)·(R_b axis_b).
+double AxisCosine(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b) {
+  return (poses[static_cast<size_t>(a.body)].R * a.axis)
+      .dot(poses[static_cast<size_t>(b.body)].R * b.axis);
+}
+
+// cos φ of the turn about the axis, (R_a ref_a)·(R_b ref_b).
+double ReferenceCosine(const std::vector<BodyPose>& poses, const Attachment& a,
+                       const Attachment& b) {
+  return (poses[static_cast<size_t>(a.body)].R * a.reference)
+      .dot(poses[static_cast<size_t>(b.body)].R * b.reference);
+}
+
+// "Axes parallel" with the sense kept. The two rows v = (A·B1, A·B2) (A a's axis, B1, B2 two
+// directions perpendicular to b's axis B) are sin θ times a unit vector, θ the angle between A
+// and B, and vanish for A = −B too: a joint mounted reversed would be a solution. No two
+// smooth functions on the sphere vanish at one point only, so the rows are mapped in the far
+// hemisphere (A·B < 0): r = v (2/|v| − 1), whose size 2 − sin θ grows on to 2 at the flip.
+// The map is the identity for A·B ≥ 0 (the joint near its solution is untouched) and C¹ at
+// θ = π/2, where |v| = 1. At the exact flip (|v| = 0) r = (2, 0), the one-sided limit along B1.
+struct SameSenseMap {
+  Eigen::Vector2d value;
+  Eigen::Matrix2d T = Eigen::Matrix2d::Identity();  // ∂r/∂v
+  bool far = false;
+  Eigen::Vector2d v;
+  double n = 0.0;
+  SameSenseMap(const Eigen::Vector2d& v_in, double cosine) : value(v_in), v(v_in) {
+    if (cosine >= 0.0) return;
+    far = true;
+    n = v.norm();
+    if (n < 1e-300) {
+      value = Eigen::Vector2d(2.0, 0.0);
+      T = -Eigen::Matrix2d::Identity();
+      return;
+    }
+    value = v * (2.0 / n - 1.0);
+    T = (2.0 / n - 1.0) * Eigen::Matrix2d::Identity() - (2.0 / (n * n * n)) * v * v.transpose();
+  }
+  // Σ_i w_i ∂²r_i/∂v∂v = −2 (w vᵀ + v wᵀ + (w·v) I)/n³ + 6 (w·v) v vᵀ/n⁵.
+  Eigen::Matrix2d Curvature(const Eigen::Vector2d& w) const {
+    if (!far || n < 1e-300) return Eigen::Matrix2d::Zero();
+    const double n3 = n * n * n, wv = w.dot(v);
+    return -2.0 * (w * v.transpose() + v * w.transpose() + wv * Eigen::Matrix2d::Identity()) / n3 +
+           6.0 * wv * v * v.transpose() / (n3 * n * n);
+  }
+};
+
 // The rows a joint is built from. Each appends to r at `row` and to the Jacobian blocks.
 struct Rows {
   Eigen::Ref<Eigen::VectorXd> r;
@@ -73,6 +120,27 @@ struct Rows {
     Ja.row(row) = V.transpose() * ju;
     Jb.row(row) = U.transpose() * jv;
     ++row;
+  }
+  // a's axis against b's two perpendiculars (2 rows), same sense only (SameSenseMap).
+  void ParallelAxes(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b,
+                    const Eigen::Vector3d& b1, const Eigen::Vector3d& b2) {
+    const int r0 = row;
+    Dot(poses, a.body, a.axis, b.body, b1);
+    Dot(poses, a.body, a.axis, b.body, b2);
+    const SameSenseMap m(r.segment<2>(r0), AxisCosine(poses, a, b));
+    r.segment<2>(r0) = m.value;
+    Ja.middleRows<2>(r0) = m.T * Ja.middleRows<2>(r0);
+    Jb.middleRows<2>(r0) = m.T * Jb.middleRows<2>(r0);
+  }
+  // No turn about the axis (1 row): s = (R_a ref_a)·(R_b (axis_b × ref_b)) = sin φ, same sense
+  // only: for cos φ = ref_a·ref_b < 0 the row is 2 sgn(s) − s (a half turn is not a solution).
+  void NoTurn(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b) {
+    const int r0 = row;
+    Dot(poses, a.body, a.reference, b.body, b.axis.cross(b.reference));
+    if (ReferenceCosine(poses, a, b) >= 0.0) return;
+    r[r0] = (r[r0] >= 0.0 ? 2.0 : -2.0) - r[r0];
+    Ja.row(r0) *= -1.0;
+    Jb.row(r0) *= -1.0;
   }
   // (P_b − P_a)·(R_a e) (1 row): b's point in a's plane through P_a normal to e.
   void Offset(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b,
@@ -105,7 +173,38 @@ struct HessianRows {
   // w (R_a u)·(R_b v).
   void Dot(const std::vector<BodyPose>& poses, int ba, const Eigen::Vector3d& u, int bb,
            const Eigen::Vector3d& v) {
+    WeightedDot(w[row++], poses, ba, u, bb, v);
+  }
+  // Σ_i w_i ∇²r_i of SameSenseMap's rows: the dot rows' curvature with the weights Tᵀw, plus
+  // the map's own second derivatives along the dot rows' gradients, Σ_jk M_jk ∇v_j ∇v_kᵀ.
+  void ParallelAxes(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b,
+                    const Eigen::Vector3d& b1, const Eigen::Vector3d& b2) {
+    const Eigen::Vector2d wk = w.segment<2>(row);
+    row += 2;
+    Matrix37 ju, j1, j2;
+    const Eigen::Vector3d U = Direction(poses, a.body, a.axis, &ju);
+    const Eigen::Vector3d B1 = Direction(poses, b.body, b1, &j1);
+    const Eigen::Vector3d B2 = Direction(poses, b.body, b2, &j2);
+    const SameSenseMap m(Eigen::Vector2d(U.dot(B1), U.dot(B2)), AxisCosine(poses, a, b));
+    const Eigen::Vector2d wt = m.T.transpose() * wk;
+    WeightedDot(wt[0], poses, a.body, a.axis, b.body, b1);
+    WeightedDot(wt[1], poses, a.body, a.axis, b.body, b2);
+    if (!m.far) return;
+    Eigen::Matrix<double, 2, 7> ga, gb;  // ∇v: rows (U·B1, U·B2) over q_a and q_b
+    ga << B1.transpose() * ju, B2.transpose() * ju;
+    gb << U.transpose() * j1, U.transpose() * j2;
+    const Eigen::Matrix2d M = m.Curvature(wk);
+    h->aa.noalias() += ga.transpose() * M * ga;
+    h->ab.noalias() += ga.transpose() * M * gb;
+    h->bb.noalias() += gb.transpose() * M * gb;
+  }
+  void NoTurn(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b) {
     const double wk = w[row++];
+    const double sign = ReferenceCosine(poses, a, b) >= 0.0 ? 1.0 : -1.0;  // r = 2 sgn s − s
+    WeightedDot(sign * wk, poses, a.body, a.reference, b.body, b.axis.cross(b.reference));
+  }
+  void WeightedDot(double wk, const std::vector<BodyPose>& poses, int ba, const Eigen::Vector3d& u,
+                   int bb, const Eigen::Vector3d& v) {
     const BodyPose& pa = poses[static_cast<size_t>(ba)];
     const BodyPose& pb = poses[static_cast<size_t>(bb)];
     const Eigen::Vector3d U = pa.R * u, V = pb.R * v;
@@ -186,17 +285,12 @@ class Joint final : public Term {
     if (kind_ == Kind::kUniversal) rows->Dot(poses, a_.body, a_.axis, b_.body, b_.axis);
     const bool parallel = kind_ == Kind::kRevolute || kind_ == Kind::kCylindrical ||
                           kind_ == Kind::kPrismatic || kind_ == Kind::kFixed;
-    if (parallel) {  // a's axis against two directions perpendicular to b's axis.
-      rows->Dot(poses, a_.body, a_.axis, b_.body, b1_);
-      rows->Dot(poses, a_.body, a_.axis, b_.body, b2_);
-    }
+    if (parallel) rows->ParallelAxes(poses, a_, b_, b1_, b2_);       // same sense
     if (kind_ == Kind::kCylindrical || kind_ == Kind::kPrismatic) {  // b's point on a's axis.
       rows->Offset(poses, a_, b_, a1_);
       rows->Offset(poses, a_, b_, a2_);
     }
-    if (kind_ == Kind::kPrismatic || kind_ == Kind::kFixed) {  // No turn about the axis.
-      rows->Dot(poses, a_.body, a_.reference, b_.body, b_.axis.cross(b_.reference));
-    }
+    if (kind_ == Kind::kPrismatic || kind_ == Kind::kFixed) rows->NoTurn(poses, a_, b_);
   }
   Kind kind_;
   const char* name_;

@@ -39,6 +39,11 @@ Solver::Solver(const Problem& problem, const SolverOptions& options)
   step_.setZero(n_);
   q_try_.setZero(n_);
   q_best_.setZero(n_);
+  q_start_.setZero(n_);
+  lambda_e_start_.setZero(problem.num_equality_rows());
+  lambda_i_start_.setZero(problem.num_inequality_rows());
+  lambda_e_best_.setZero(problem.num_equality_rows());
+  lambda_i_best_.setZero(problem.num_inequality_rows());
   shifted_.setZero(problem.num_inequality_rows());
   active_.assign(static_cast<size_t>(problem.num_inequality_rows()), 0);
   kkt_.setZero(n_);
@@ -194,17 +199,31 @@ void Solver::Normalize(Eigen::VectorXd* q) const {
   }
 }
 
+namespace {
+
+// max that keeps a NaN (std::max and Eigen's default maxCoeff drop it unless it comes first: a
+// NaN configuration then reported violation 0 and "converged").
+double NanMax(double v, double x) {
+  return std::isnan(v) || std::isnan(x) ? std::numeric_limits<double>::quiet_NaN() : std::max(v, x);
+}
+
+double MaxAbs(const Eigen::VectorXd& x) {
+  return x.size() ? x.cwiseAbs().maxCoeff<Eigen::PropagateNaN>() : 0.0;
+}
+
+}  // namespace
+
 double Solver::Complementarity() const {
   double v = 0.0;
   for (int i = 0; i < ev_.c_i().size(); ++i) {
-    if (lambda_i_[i] > 0.0) v = std::max(v, ev_.c_i()[i]);
+    if (!(lambda_i_[i] <= 0.0)) v = NanMax(v, ev_.c_i()[i]);  // (a NaN multiplier counts)
   }
   return v;
 }
 
 double Solver::Violation() const {
-  double v = ev_.c_e().size() ? ev_.c_e().cwiseAbs().maxCoeff() : 0.0;
-  for (int i = 0; i < ev_.c_i().size(); ++i) v = std::max(v, -ev_.c_i()[i]);
+  double v = MaxAbs(ev_.c_e());
+  for (int i = 0; i < ev_.c_i().size(); ++i) v = NanMax(v, -ev_.c_i()[i]);
   return v;
 }
 
@@ -236,10 +255,28 @@ double Solver::NewtonStep() {
   return lm;
 }
 
+SolveStats Solver::InvalidInput(Eigen::VectorXd* q, SolveStats st) {
+  *q = q_start_;
+  lambda_e_ = lambda_e_start_;
+  lambda_i_ = lambda_i_start_;
+  st.invalid_input = true;
+  st.converged = false;
+  st.iterations = 0;
+  st.max_violation = st.kkt_residual = st.complementarity = st.objective =
+      std::numeric_limits<double>::infinity();
+  return st;
+}
+
 SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   Eigen::VectorXd& q = *q_io;
+  // Kept to undo a solve whose input or iterates turn out non-finite (all sized at
+  // construction: these copies allocate nothing).
+  q_start_ = q;
+  lambda_e_start_ = lambda_e_;
+  lambda_i_start_ = lambda_i_;
+  if (!q.allFinite()) return InvalidInput(&q, SolveStats{});
   q_prev_ = q;
   problem_.mechanism().MetricBlocks(q_prev_, &M_);
   SolveStats st;
@@ -259,7 +296,14 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     kkt_ = grad_e_;  // ∇E − J_Eᵀλ_E − J_Iᵀλ_I at the current multipliers.
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &kkt_);
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, &kkt_);
-    st.kkt_residual = kkt_.size() ? kkt_.cwiseAbs().maxCoeff() : 0.0;
+    st.kkt_residual = MaxAbs(kkt_);
+    if (!std::isfinite(st.max_violation) || !std::isfinite(st.kkt_residual)) {
+      // At the start this is the input (a non-finite goal target, or a term that cannot be
+      // evaluated there): a defined status, q and the multipliers as they came. Later it is a
+      // step gone wrong: stop and return the best iterate (below).
+      if (st.iterations == 0) return InvalidInput(&q, st);
+      break;
+    }
     // Converged: feasible, stationary, and complementary (no force on a separated contact).
     st.complementarity = Complementarity();
     if (st.max_violation <= options_.constraint_tolerance &&
@@ -275,6 +319,8 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     if (score < best_score) {
       best_score = score;
       q_best_ = q;
+      lambda_e_best_ = lambda_e_;
+      lambda_i_best_ = lambda_i_;
       best_violation = st.max_violation;
       best_kkt = st.kkt_residual;
     }
@@ -342,18 +388,30 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     kkt_ = grad_e_;
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &kkt_);
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, &kkt_);
-    st.kkt_residual = kkt_.size() ? kkt_.cwiseAbs().maxCoeff() : 0.0;
+    st.kkt_residual = MaxAbs(kkt_);
   }
   if (!st.converged && best_score < std::numeric_limits<double>::infinity()) {
     const double score = std::max(st.max_violation / options_.constraint_tolerance,
                                   st.kkt_residual / options_.kkt_tolerance);
     if (!(score <= best_score)) {  // (also when the last iterate's residuals are NaN)
       q = q_best_;
+      lambda_e_ = lambda_e_best_;
+      lambda_i_ = lambda_i_best_;
       ev_.Evaluate(q);
       st.max_violation = best_violation;
       st.kkt_residual = best_kkt;
       st.complementarity = Complementarity();
     }
+  }
+  if (!q.allFinite() || !lambda_e_.allFinite() || !lambda_i_.allFinite() ||
+      !std::isfinite(st.max_violation)) {
+    // Every iterate went wrong (no finite best one): undo the whole solve, so the next one
+    // starts from where this one did (a NaN multiplier would otherwise persist and spoil every
+    // later solve).
+    SolveStats failed = InvalidInput(&q, st);
+    failed.invalid_input = false;
+    failed.iterations = st.iterations;
+    return failed;
   }
   st.objective = ev_.Objective(q, q_prev_, M_);
   st.penalty = mu_;

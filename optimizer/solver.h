@@ -54,6 +54,9 @@ struct SolveStats {
   double penalty = 1e6;
   bool converged = false;
   bool budget_exhausted = false;
+  /// The input was not finite (a coordinate, or a goal target / term at the start point): no
+  /// step was taken, q and the multipliers are as they came, the residuals are +inf.
+  bool invalid_input = false;
   /// Second-order check (only with SolverOptions::second_order_check): the Lagrangian's Hessian
   /// restricted to the null space of the active constraints' Jacobian is positive definite
   /// (a strict local minimum, not a saddle), and its smallest eigenvalue.
@@ -97,6 +100,8 @@ class Solver {
 
  private:
   void AugmentedGradient();
+  /// Restores q and the multipliers to the solve's start and marks the stats invalid_input.
+  SolveStats InvalidInput(Eigen::VectorXd* q, SolveStats st);
   /// Builds H_; returns the scale of its objective part (for the damping).
   double NewtonMatrix();
   double Violation() const;
@@ -118,6 +123,8 @@ class Solver {
   BlockMatrix H_;
   std::vector<Matrix7d> M_;
   Eigen::VectorXd q_prev_, lambda_e_, lambda_i_, g_, step_, q_try_, q_best_, shifted_;
+  // The solve's start and its best iterate's multipliers (undo a non-finite solve).
+  Eigen::VectorXd q_start_, lambda_e_start_, lambda_i_start_, lambda_e_best_, lambda_i_best_;
   Eigen::VectorXd weights_, gn_e_, gn_i_, gn_o_, kkt_, grad_e_, linearized_e_, linearized_i_,
       jstep_e_, jstep_i_;
   Eigen::LLT<Eigen::MatrixXd, Eigen::Upper> llt_;

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <numbers>
 
 #include "nurbs/primitives.h"
 #include "optimizer/contacts.h"
@@ -373,6 +375,86 @@ TEST(SolverTest, ALoadedContactOnACurvedSurfaceStaysActiveWhileDragged) {
   // The contact carries the goal's pull, weight x 0.4 radius (least astonishment aside).
   EXPECT_NEAR(load, 0.4 * radius, 1e-6 * radius);
   EXPECT_GT(guess_hits, 0);  // the failure this guards against, reproduced
+}
+
+// Issue 13: a non-finite input gets a defined status and never poisons the next solve. Before,
+// the residuals' maxCoeff skipped a NaN (a NaN configuration returned "converged" after 0
+// iterations), and one NaN goal turned the multipliers into NaN for every later solve.
+TEST(SolverTest, NonFiniteInputIsRejectedAndNeverPoisonsTheNextSolve) {
+  testing::FourBar fb;
+  std::shared_ptr<PositionGoalTerm> goal;
+  const Problem p = fb.MakeProblem(testing::FourBar::PathPoint(0), &goal);
+  Solver solver(p);
+  Eigen::VectorXd q = fb.mechanism.InitialCoordinates();
+  ASSERT_TRUE(solver.Solve(&q).converged);
+  const Eigen::VectorXd good = q;
+  const Eigen::VectorXd lambda = solver.equality_multipliers();
+  // A NaN coordinate (anywhere, not only first).
+  for (Eigen::Index k : {Eigen::Index{0}, q.size() / 2, q.size() - 1}) {
+    Eigen::VectorXd bad = good;
+    bad[k] = std::numeric_limits<double>::quiet_NaN();
+    const SolveStats s = solver.Solve(&bad);
+    EXPECT_FALSE(s.converged) << k;
+    EXPECT_TRUE(s.invalid_input) << k;
+    EXPECT_EQ(s.iterations, 0);
+    EXPECT_TRUE(std::isinf(s.max_violation));
+    EXPECT_EQ(solver.equality_multipliers(), lambda);
+  }
+  // A NaN or infinite goal target: rejected, q and the multipliers untouched, and the next
+  // valid solves as fast as before.
+  for (double bad_target : {std::numeric_limits<double>::quiet_NaN(),
+                            std::numeric_limits<double>::infinity(), -1e308 * 10}) {
+    goal->set_target(Eigen::Vector3d(0.1, bad_target, 0.0));
+    Eigen::VectorXd x = good;
+    const SolveStats s = solver.Solve(&x);
+    EXPECT_FALSE(s.converged);
+    EXPECT_TRUE(s.invalid_input);
+    EXPECT_EQ(x, good);
+    EXPECT_TRUE(solver.equality_multipliers().allFinite());
+    EXPECT_TRUE(solver.inequality_multipliers().allFinite());
+    goal->set_target(testing::FourBar::PathPoint(1));
+    const SolveStats next = solver.Solve(&x);
+    EXPECT_TRUE(next.converged);
+    EXPECT_LE(next.iterations, 6);
+    EXPECT_TRUE(x.allFinite());
+    x = good;
+    goal->set_target(testing::FourBar::PathPoint(0));
+    ASSERT_TRUE(solver.Solve(&x).converged);
+  }
+}
+
+// A weld started 0.3 rad short of its flipped configurations (the part's axis reversed, a half
+// turn about the axis, or both) used to converge there: the "axes parallel" rows vanish for
+// antiparallel axes too, and the weld's reference row for a half turn. Now no flipped
+// configuration is a solution: the solve must not end there. (From that far out the cold solve
+// does not reach the weld within its 60 iterations either: the mapped rows are flat at 90°,
+// where sin θ peaks; docs/optimizer.md says so.)
+TEST(SolverTest, AWeldStartedNearAFlipDoesNotConvergeThere) {
+  Mechanism m;
+  Body g{"ground"};
+  g.fixed = true;
+  const int ground = m.AddBody(g);
+  const int part = m.AddBody(Body{"part"});
+  const Eigen::Vector3d axis(0, 0, 1), ref(1, 0, 0);
+  for (const Eigen::Vector3d& flip_about : {ref, axis, Eigen::Vector3d(axis.cross(ref))}) {
+    Problem p(m);
+    p.AddEquality(FixedJoint({ground, {0, 0, 0}, axis, ref}, {part, {0, 0, 0}, axis, ref}));
+    Solver solver(p);
+    Eigen::VectorXd q = m.InitialCoordinates();
+    const Eigen::Quaterniond flip(Eigen::AngleAxisd(std::numbers::pi, flip_about));
+    const Eigen::Quaterniond start(Eigen::AngleAxisd(std::numbers::pi - 0.3, flip_about));
+    q.segment<4>(3) << start.w(), start.x(), start.y(), start.z();
+    const SolveStats s = solver.Solve(&q);
+    const Eigen::Quaterniond end(q[3], q[4], q[5], q[6]);
+    std::printf(
+        "weld from %.2f rad about (%g %g %g): %d iterations, %s, violation %.1e, %.2f rad "
+        "from the flip\n",
+        std::numbers::pi - 0.3, flip_about.x(), flip_about.y(), flip_about.z(), s.iterations,
+        s.converged ? "converged" : "not converged", s.max_violation, end.angularDistance(flip));
+    EXPECT_GE(end.angularDistance(flip), 0.29);
+    EXPECT_FALSE(s.converged && s.max_violation < 1e-6 && end.angularDistance(flip) < 0.29);
+    EXPECT_GT(s.max_violation, 0.1);  // not a solution
+  }
 }
 
 }  // namespace

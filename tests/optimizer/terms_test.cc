@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <numbers>
 #include <random>
 
 #include "optimizer/goals.h"
@@ -52,9 +53,8 @@ void ForEachCoordinate(const Fixture& f, const Term& term, const Eigen::VectorXd
   }
 }
 
-void CheckTerm(const Fixture& f, const Term& term, std::mt19937_64& rng) {
-  for (int trial = 0; trial < 5; ++trial) {
-    const Eigen::VectorXd q = RandomCoordinates(rng, f.mech.num_coordinates());
+void CheckTermAt(const Fixture& f, const Term& term, const Eigen::VectorXd& q) {
+  {
     std::vector<BodyPose> poses;
     f.mech.Poses(q, &poses);
     const int m = term.dim();
@@ -80,12 +80,18 @@ void CheckTerm(const Fixture& f, const Term& term, std::mt19937_64& rng) {
 }
 
 // Σ w_i ∇²r_i against finite differences of the weighted gradient Jᵀw over both bodies.
-void CheckHessian(const Fixture& f, const Term& term, std::mt19937_64& rng) {
+void CheckTerm(const Fixture& f, const Term& term, std::mt19937_64& rng) {
+  for (int trial = 0; trial < 5; ++trial) {
+    CheckTermAt(f, term, RandomCoordinates(rng, f.mech.num_coordinates()));
+  }
+}
+
+void CheckHessianAt(const Fixture& f, const Term& term, const Eigen::VectorXd& q,
+                    std::mt19937_64& rng) {
   if (!term.has_hessian()) return;
   std::normal_distribution<double> g(0.0, 1.0);
   const int m = term.dim();
-  for (int trial = 0; trial < 3; ++trial) {
-    const Eigen::VectorXd q = RandomCoordinates(rng, f.mech.num_coordinates());
+  {
     Eigen::VectorXd w(m);
     for (int i = 0; i < m; ++i) w[i] = g(rng);
     std::vector<BodyPose> poses;
@@ -128,6 +134,12 @@ void CheckHessian(const Fixture& f, const Term& term, std::mt19937_64& rng) {
                 << term.name() << " H_b* side " << side << " k " << k;
           }
         });
+  }
+}
+
+void CheckHessian(const Fixture& f, const Term& term, std::mt19937_64& rng) {
+  for (int trial = 0; trial < 3; ++trial) {
+    CheckHessianAt(f, term, RandomCoordinates(rng, f.mech.num_coordinates()), rng);
   }
 }
 
@@ -182,6 +194,58 @@ TEST(TermsTest, JointsVanishWhenAssembled) {
     Eigen::MatrixXd J1(t->dim(), 7), J2(t->dim(), 7);
     t->Evaluate(poses, r, J1, J2);
     EXPECT_LT(r.cwiseAbs().maxCoeff(), 1e-15) << t->name();
+  }
+}
+
+// Issue 13: "axes parallel" must not accept antiparallel axes, and a weld must not accept a half
+// turn. Body b is placed on a's attachment (the joint assembled), then turned by a half turn
+// about a's reference (axis reversed), about the axis (reference reversed) or about their
+// cross product: every one of those is now far from zero, the assembled pose still exactly zero,
+// and the mapped rows' derivatives (far hemisphere) match finite differences.
+TEST(TermsTest, FlippedMountingsAreNotSolutions) {
+  Fixture f;
+  const Eigen::Quaterniond qa(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 0, 1).normalized()));
+  const Eigen::Vector3d pa(0.2, 0.3, -0.1), point_a(0.1, 0.0, 0.2), axis(0, 0, 1), ref(1, 0, 0);
+  const Attachment a{f.a, point_a, axis, ref};
+  const Attachment b{f.b, Eigen::Vector3d::Zero(), axis, ref};
+  auto pose = [&](const Eigen::Quaterniond& turn) {  // b's frame = a's frame turned, at a's point
+    const Eigen::Quaterniond qb = qa * turn;
+    Eigen::VectorXd q(14);
+    q << pa, qa.w(), qa.x(), qa.y(), qa.z(), pa + qa * point_a, qb.w(), qb.x(), qb.y(), qb.z();
+    return q;
+  };
+  auto residual = [&](const Term& t, const Eigen::VectorXd& q) {
+    std::vector<BodyPose> poses;
+    f.mech.Poses(q, &poses);
+    Eigen::VectorXd r(t.dim());
+    Eigen::MatrixXd J1(t.dim(), 7), J2(t.dim(), 7);
+    t.Evaluate(poses, r, J1, J2);
+    return r.norm();
+  };
+  const double pi = std::numbers::pi;
+  const Eigen::Quaterniond flips[3] = {
+      Eigen::Quaterniond(Eigen::AngleAxisd(pi, ref)),               // axis reversed
+      Eigen::Quaterniond(Eigen::AngleAxisd(pi, axis)),              // half turn about the axis
+      Eigen::Quaterniond(Eigen::AngleAxisd(pi, axis.cross(ref)))};  // both reversed
+  std::mt19937_64 rng(33);
+  for (const TermPtr& t :
+       {RevoluteJoint(a, b), CylindricalJoint(a, b), PrismaticJoint(a, b), FixedJoint(a, b)}) {
+    EXPECT_LT(residual(*t, pose(Eigen::Quaterniond::Identity())), 1e-15) << t->name();
+    const bool turns_matter = t->name() == "prismatic" || t->name() == "fixed";
+    for (int k = 0; k < 3; ++k) {
+      const double r = residual(*t, pose(flips[k]));
+      if (k == 1 && !turns_matter) {
+        EXPECT_LT(r, 1e-15) << t->name() << ": a turn about the axis is this joint's motion";
+      } else {
+        EXPECT_GE(r, 1.9) << t->name() << " flip " << k;
+      }
+      // Just short of the flip (far hemisphere): derivatives against finite differences.
+      const Eigen::Quaterniond near_flip =
+          flips[k] *
+          Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()));
+      CheckTermAt(f, *t, pose(near_flip));
+      CheckHessianAt(f, *t, pose(near_flip), rng);
+    }
   }
 }
 
