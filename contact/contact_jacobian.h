@@ -35,7 +35,9 @@ Matrix4x14 RelativeVelocityMap(const BodyPose& pose_f, const BodyPose& pose_g,
 /// Anitescu et al. for the separated case), written with II = F E⁻¹ and ĨI_f = R_θ II_f R_θ:
 ///   u̇_f = E_f⁻¹ R_θ (II_g + ĨI_f + β II_g ĨI_f)⁻¹ ([−ω_y; ω_x] + II_g [v_x; v_y]),
 ///   u̇_g = E_g⁻¹ (II_g + ĨI_f + β ĨI_f II_g)⁻¹ ((1 + β ĨI_f)[−ω_y; ω_x] − ĨI_f [v_x; v_y]).
-/// Valid for facing normals (σ = −1); used as a cross-check. @return false when singular.
+/// Valid for facing normals (σ = −1); used as a cross-check. @pre n_f·n_g < −1 + 1e-9
+/// (checked). @return false when singular or when the normals do not face each other.
+inline constexpr double kMontanaFacingTolerance = 1e-9;  // |n_f·n_g + 1| at an extremum: rounding
 bool ContactJacobianMontana(const SurfacePairEval& e, const BodyPose& pose_f,
                             const BodyPose& pose_g, Matrix4x14* u_q);
 

@@ -20,6 +20,8 @@ const char* ToString(ExtremalStatus s) {
       return "singular";
     case ExtremalStatus::kNotConverged:
       return "not_converged";
+    case ExtremalStatus::kInvalidInput:
+      return "invalid_input";
   }
   return "?";
 }
@@ -150,11 +152,53 @@ Eigen::Vector2d Hi(const nurbs::NurbsSurface& s) {
 
 }  // namespace
 
+namespace {
+
+bool FinitePose(const BodyPose& p) { return p.q.allFinite() && p.R.allFinite(); }
+
+// The seed with each non-finite component replaced by the middle of its domain.
+template <int N>
+Eigen::Matrix<double, N, 1> SaneSeed(const Eigen::Matrix<double, N, 1>& seed,
+                                     const Eigen::Matrix<double, N, 1>& lo,
+                                     const Eigen::Matrix<double, N, 1>& hi) {
+  Eigen::Matrix<double, N, 1> x = seed;
+  for (int i = 0; i < N; ++i) {
+    if (!std::isfinite(x[i])) x[i] = 0.5 * (lo[i] + hi[i]);
+  }
+  return x;
+}
+
+// The defined answer to a non-finite seed or pose (ExtremalStatus::kInvalidInput).
+template <class Extremum, int N>
+Extremum InvalidExtremum(const Eigen::Matrix<double, N, 1>& u) {
+  Extremum out;
+  out.u = u;
+  out.status = ExtremalStatus::kInvalidInput;
+  out.kind = ExtremumKind::kDegenerate;
+  out.p_f.setZero();
+  out.frame_f.setIdentity();
+  return out;
+}
+
+}  // namespace
+
 SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                                            const nurbs::NurbsSurface& g, const BodyPose& pose_g,
                                            const Eigen::Vector4d& seed,
                                            const ExtremalOptions& options,
                                            SurfacePairEval* at_solution) {
+  if (!seed.allFinite() || !FinitePose(pose_f) || !FinitePose(pose_g)) {
+    Eigen::Vector4d lo, hi;
+    lo << Lo(f), Lo(g);
+    hi << Hi(f), Hi(g);
+    auto out = InvalidExtremum<SurfaceSurfaceExtremum, 4>(SaneSeed<4>(seed, lo, hi));
+    out.beta = std::numeric_limits<double>::infinity();
+    out.p_g.setZero();
+    out.n_g = Eigen::Vector3d::UnitZ();
+    out.frame_g.setIdentity();
+    out.alignment = -1.0;
+    return out;
+  }
   nurbs::SpanHint hf, hg;
   SurfacePairEval e;
   auto eval = [&](const Eigen::Vector4d& x, internal::NewtonSystem<4>* s) {
@@ -195,6 +239,11 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
                                        const BodyPose& pose_f, const Eigen::Vector2d& seed,
                                        const ExtremalOptions& options,
                                        PlacedSurfacePoint* at_solution) {
+  if (!seed.allFinite() || !x_W.allFinite() || !FinitePose(pose_f)) {
+    auto out = InvalidExtremum<PointSurfaceExtremum, 2>(SaneSeed<2>(seed, Lo(f), Hi(f)));
+    out.distance = std::numeric_limits<double>::infinity();
+    return out;
+  }
   nurbs::SpanHint hf;
   PlacedSurfacePoint p;
   auto eval = [&](const Eigen::Vector2d& x, internal::NewtonSystem<2>* s) {
@@ -260,6 +309,15 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
                                        const BodyCurve& g, const BodyPose& pose_g,
                                        const Eigen::Vector3d& seed,
                                        const ExtremalOptions& options) {
+  if (!seed.allFinite() || !FinitePose(pose_f) || !FinitePose(pose_g)) {
+    Eigen::Vector3d lo, hi;
+    lo << Lo(f), g.domain_begin();
+    hi << Hi(f), g.domain_end();
+    auto out = InvalidExtremum<CurveSurfaceExtremum, 3>(SaneSeed<3>(seed, lo, hi));
+    out.beta = std::numeric_limits<double>::infinity();
+    out.p_g.setZero();
+    return out;
+  }
   nurbs::SpanHint hf, hg;
   int span_g = 0;
   CurveSurfaceEval e;

@@ -16,6 +16,10 @@ enum class ExtremalStatus {
   kSingular,      ///< converged, but the Newton matrix is singular there (focal point, or a
                   ///< continuum of extremal pairs): the point is one of many / unstable
   kNotConverged,  ///< iteration budget exhausted; the best point is returned
+  /// A seed or a pose was not finite (a NaN parameter, a zero or NaN quaternion): no Newton
+  /// step was taken; u is the seed with its non-finite components replaced by the domain's
+  /// middle, distances are +inf, points zero and frames the identity (never NaN).
+  kInvalidInput,
 };
 /// The extremum's type from the second-order conditions of ½|f − g|² on the free parameters.
 enum class ExtremumKind { kMinimum, kSaddle, kMaximum, kDegenerate };

@@ -37,6 +37,14 @@ NurbsCurve<Dim>::NurbsCurve(KnotVector knots, const std::vector<Vec>& points,
       os << "NURBS curve: weight [" << k << "] = " << w << " must be positive and finite";
       throw std::invalid_argument(os.str());
     }
+    if (!(w >= kMinWeight && w <= kMaxWeight) ||
+        !(points[k].cwiseAbs().maxCoeff() * std::max(w, 1.0) <= kMaxCoordinate)) {
+      std::ostringstream os;
+      os << "NURBS curve: control point [" << k << "] with weight " << w
+         << " is out of range: weights must lie in [1e-100, 1e100] and coordinates, also "
+            "times their weight, within 1e100 (evaluation would overflow)";
+      throw std::invalid_argument(os.str());
+    }
     cpw_[k] << w * points[k], w;
   }
   Finish();
@@ -59,6 +67,14 @@ NurbsCurve<Dim> NurbsCurve<Dim>::FromHomogeneous(KnotVector knots,
       throw std::invalid_argument("NURBS curve: homogeneous control point " + std::to_string(k) +
                                   " is not finite or has a non-positive weight");
     }
+    const double w = weighted_points[k][Dim];
+    if (!(w >= kMinWeight && w <= kMaxWeight) ||
+        !(weighted_points[k].template head<Dim>().cwiseAbs().maxCoeff() <=
+          kMaxCoordinate * std::min(w, 1.0))) {
+      throw std::invalid_argument("NURBS curve: homogeneous control point " + std::to_string(k) +
+                                  " is out of range: weights must lie in [1e-100, 1e100] and "
+                                  "coordinates, also times their weight, within 1e100");
+    }
   }
   NurbsCurve c(std::move(knots), std::move(weighted_points), 0);
   c.Finish();
@@ -73,7 +89,7 @@ void NurbsCurve<Dim>::Finish() {
 template <int Dim>
 CurvePoint<Dim> EvaluateReference(const NurbsCurve<Dim>& curve, double t, int order) {
   const KnotVector& k = curve.knots();
-  t = std::clamp(t, k.domain_begin(), k.domain_end());
+  t = k.Clamp(t);
   order = std::clamp(order, 0, kMaxOrder);
   const int p = k.degree();
   const int span = k.FindSpan(t);

@@ -88,7 +88,7 @@ int KnotVector::FindSpan(double t, int hint) const {
     while ((*this)[k] == (*this)[k + 1]) --k;  // Last non-empty span.
     return k;
   }
-  if (t <= domain_begin()) {
+  if (!(t > domain_begin())) {  // (NaN too)
     int k = p;
     while ((*this)[k] == (*this)[k + 1]) ++k;  // First non-empty span.
     return k;

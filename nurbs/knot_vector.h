@@ -36,9 +36,15 @@ class KnotVector {
   std::vector<double> Breakpoints() const;
 
   /// Index k with `t_k <= t < t_{k+1}` and `p <= k < n`; `t` is clamped to the domain and the
-  /// domain end belongs to the last non-empty span. `hint` (a previous answer) is tried first
-  /// together with its neighbours, so coherent queries cost O(1); any value is accepted.
+  /// domain end belongs to the last non-empty span; a NaN `t` gives the first non-empty span
+  /// (never an index outside [p, n)). `hint` (a previous answer) is tried first together with
+  /// its neighbours, so coherent queries cost O(1); any value is accepted.
   int FindSpan(double t, int hint = -1) const;
+  /// t clamped to the domain; NaN gives the domain's start (every evaluation path calls this,
+  /// so a non-finite parameter evaluates a defined point and never reads outside the net).
+  double Clamp(double t) const {
+    return t >= domain_begin() ? (t <= domain_end() ? t : domain_end()) : domain_begin();
+  }
 
   /// Whether `other` contains every knot of this vector's domain with at least the same
   /// multiplicity and has the same domain (the condition for refinement).

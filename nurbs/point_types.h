@@ -6,6 +6,15 @@
 
 namespace tangent::nurbs {
 
+/// Range of control-point coordinates and weights that NURBS constructors accept. Evaluation
+/// forms weighted points w·P, sums of up to 100 of them, derivatives that multiply by up to
+/// (1/h)² on short spans (1e18 at h = 1e-9) and squares of those (normals, distances): with
+/// |P|, w and w·|P| within 1e100 (and w ≥ 1e-100) none of these overflow a double (1e308).
+/// Weights like 1e300 used to pass validation and overflow to NaN on evaluation.
+inline constexpr double kMaxCoordinate = 1e100;
+inline constexpr double kMinWeight = 1e-100;
+inline constexpr double kMaxWeight = 1e100;
+
 /// A surface point and its partial derivatives, all in the surface's own frame (for a surface
 /// mounted on a body: the body frame B). Entries beyond the requested order are left unset.
 struct SurfacePoint {

@@ -355,8 +355,8 @@ void DifferenceRows(const KnotVector& k, int mu, double t, int count, AlphaRow* 
 SurfacePoint EvaluateByRefinement(const NurbsSurface& surface, double u, double v, int order) {
   const KnotVector& ku = surface.knots_u();
   const KnotVector& kv = surface.knots_v();
-  u = std::clamp(u, ku.domain_begin(), ku.domain_end());
-  v = std::clamp(v, kv.domain_begin(), kv.domain_end());
+  u = ku.Clamp(u);
+  v = kv.Clamp(v);
   order = std::clamp(order, 0, kMaxOrder);
   const int p = ku.degree();
   const int q = kv.degree();
@@ -397,7 +397,7 @@ SurfacePoint EvaluateByRefinement(const NurbsSurface& surface, double u, double 
 template <int Dim>
 CurvePoint<Dim> EvaluateByRefinement(const NurbsCurve<Dim>& curve, double t, int order) {
   const KnotVector& k = curve.knots();
-  t = std::clamp(t, k.domain_begin(), k.domain_end());
+  t = k.Clamp(t);
   order = std::clamp(order, 0, kMaxOrder);
   const int p = k.degree();
   const int mu = k.FindSpan(t);

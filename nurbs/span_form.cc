@@ -321,7 +321,7 @@ void SpanFormCurve<Dim>::Evaluate(double t, int order, int* hint,
   const int i = internal::FindInterval(breaks_, t, *hint);
   *hint = i;
   const double inv_h = inv_h_[static_cast<size_t>(i)];
-  const double s = std::clamp((t - breaks_[static_cast<size_t>(i)]) * inv_h, 0.0, 1.0);
+  const double s = internal::ClampUnit((t - breaks_[static_cast<size_t>(i)]) * inv_h);
   const HPoint* c = coeffs_.data() + offsets_[static_cast<size_t>(i)];
   if (net_form_[static_cast<size_t>(i)]) {
     NetPiece(c, s, inv_h, order, out);

@@ -21,8 +21,11 @@ struct SpanHint {
 
 namespace internal {
 
-/// Index i with `breaks[i] <= x < breaks[i+1]`, clamped to [0, breaks.size() - 2]; tries `hint`
-/// first, then a branchless binary search.
+/// x clamped to [0, 1], NaN to 0.
+inline double ClampUnit(double x) { return x >= 0.0 ? (x <= 1.0 ? x : 1.0) : 0.0; }
+
+/// Index i with `breaks[i] <= x < breaks[i+1]`, clamped to [0, breaks.size() - 2] (NaN: 0);
+/// tries `hint` first, then a branchless binary search.
 int FindInterval(const std::vector<double>& breaks, double x, int hint);
 
 /// Bernstein polynomials at s ∈ [0, 1] of degrees p, p−1, p−2: b[d][i] = B_{i,p−d}(s) (rows of
@@ -94,9 +97,10 @@ class SpanFormSurface {
     const double v0 = breaks_v_[static_cast<size_t>(j)];
     const double inv_hu = inv_h_u_[static_cast<size_t>(i)];
     const double inv_hv = inv_h_v_[static_cast<size_t>(j)];
-    // Clamp to the span so a parameter outside the domain evaluates the domain edge.
-    const double s = std::clamp((u - u0) * inv_hu, 0.0, 1.0);
-    const double t = std::clamp((v - v0) * inv_hv, 0.0, 1.0);
+    // Clamp to the span so a parameter outside the domain evaluates the domain edge (a NaN one
+    // the domain's start: FindInterval gives span 0 and ClampUnit 0).
+    const double s = internal::ClampUnit((u - u0) * inv_hu);
+    const double t = internal::ClampUnit((v - v0) * inv_hv);
     const size_t span = static_cast<size_t>(i * num_spans_v() + j);
     const Eigen::Vector4d* c = coeffs_.data() + offsets_[span];
     if (net_form_[span]) {

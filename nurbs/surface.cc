@@ -49,6 +49,15 @@ NurbsSurface::NurbsSurface(KnotVector knots_u, KnotVector knots_v,
            << " must be positive and finite";
         throw std::invalid_argument(os.str());
       }
+      if (!(w >= kMinWeight && w <= kMaxWeight) ||
+          !(points[k].cwiseAbs().maxCoeff() * std::max(w, 1.0) <= kMaxCoordinate)) {
+        std::ostringstream os;
+        os << "NURBS surface: control point " << Index2(i, j) << " (" << points[k].transpose()
+           << ") with weight " << w << " is out of range: weights must lie in [1e-100, 1e100] "
+           << "and coordinates, also times their weight, within 1e100 (evaluation would "
+              "overflow)";
+        throw std::invalid_argument(os.str());
+      }
       cpw_[k] << w * points[k], w;
     }
   }
@@ -72,6 +81,14 @@ NurbsSurface NurbsSurface::FromHomogeneous(KnotVector knots_u, KnotVector knots_
     if (!weighted_points[k].allFinite() || !(weighted_points[k][3] > 0.0)) {
       throw std::invalid_argument("NURBS surface: homogeneous control point " + std::to_string(k) +
                                   " is not finite or has a non-positive weight");
+    }
+    const double w = weighted_points[k][3];
+    if (!(w >= kMinWeight && w <= kMaxWeight) ||
+        !(weighted_points[k].head<3>().cwiseAbs().maxCoeff() <=
+          kMaxCoordinate * std::min(w, 1.0))) {
+      throw std::invalid_argument("NURBS surface: homogeneous control point " + std::to_string(k) +
+                                  " is out of range: weights must lie in [1e-100, 1e100] and "
+                                  "coordinates, also times their weight, within 1e100");
     }
   }
   NurbsSurface s(std::move(knots_u), std::move(knots_v), std::move(weighted_points), 0);
@@ -128,8 +145,8 @@ SurfacePoint NurbsSurface::Evaluate(double u, double v, int order) const {
 SurfacePoint EvaluateReference(const NurbsSurface& surface, double u, double v, int order) {
   const KnotVector& ku = surface.knots_u();
   const KnotVector& kv = surface.knots_v();
-  u = std::clamp(u, ku.domain_begin(), ku.domain_end());
-  v = std::clamp(v, kv.domain_begin(), kv.domain_end());
+  u = ku.Clamp(u);
+  v = kv.Clamp(v);
   order = std::clamp(order, 0, kMaxOrder);
   const int p = ku.degree();
   const int q = kv.degree();
