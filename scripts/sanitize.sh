@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Builds the whole project with AddressSanitizer and UndefinedBehaviorSanitizer (gcc's; any
+# finding aborts the test that made it) in build-asan/ and runs every test there.
+#   bash scripts/sanitize.sh [ctest arguments, e.g. -R nurbs]
+# The real-time tests still run (slower under the sanitizers, so their rate figures mean nothing
+# here); ASAN_OPTIONS/UBSAN_OPTIONS below make every report fatal and printed with a stack.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install-deps.sh
+flags="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined"
+TANGENT_BUILD_DIR=build-asan bash scripts/build.sh -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  "-DCMAKE_CXX_FLAGS=$flags" "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined"
+export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+cd build-asan
+ctest --output-on-failure --parallel "$(nproc)" --timeout 1200 "$@"
