@@ -63,7 +63,10 @@ Solver::Solver(const Problem& problem, const SolverOptions& options)
   if (H_.is_sparse()) {
     ldlt_.analyzePattern(H_.sparse());  // The structure is fixed: analysed once.
   } else {
-    llt_ = Eigen::LLT<Eigen::MatrixXd, Eigen::Upper>(n_);
+    // Sizes the factorization's storage (later computes reuse it). Not LLT(n_) assigned: that
+    // constructor leaves its status uninitialized and the move copies it (UBSan: "not a valid
+    // value for type ComputationInfo").
+    llt_.compute(Eigen::MatrixXd::Identity(n_, n_));
   }
   Reset();
 }
