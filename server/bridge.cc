@@ -15,6 +15,8 @@
 #include <tangent/scene_state_t.hpp>
 #include <tangent/wrench_t.hpp>
 
+#include "server/lcm_subscriptions.h"
+
 namespace tangent::server {
 
 std::unique_ptr<lcm::LCM> OpenLcm(const std::string& url) {
@@ -37,6 +39,7 @@ struct Bridge::Impl {
   std::FILE* log;
   bool status;
   std::unique_ptr<lcm::LCM> lcm;
+  std::unique_ptr<LcmSubscriptions> subs;
   DeviceFilter filter;
   tangent::device_state_t device_msg;
   BridgeSummary* summary;
@@ -78,10 +81,10 @@ struct Bridge::Impl {
 
   /// Every packet on the device channel: decoded here (not by LCM's typed handler, which only
   /// prints a failure) so that undecodable and wrong-type packets are counted.
-  void OnDevicePacket(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    if (device_msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) {
+  void OnDevicePacket(const void* data, uint32_t size) {
+    if (device_msg.decode(data, 0, static_cast<int>(size)) < 0) {
       ++summary->undecodable;
-      if (rbuf->data_size >= 8 && IsOtherTangentType(rbuf->data)) ++summary->wrong_type;
+      if (size >= 8 && IsOtherTangentType(data)) ++summary->wrong_type;
       return;
     }
     OnDevice(device_msg);
@@ -130,8 +133,8 @@ struct Bridge::Impl {
     awaiting = true;
     awaited_seq = m.seq;
   }
-  void OnPing(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    lcm->publish(ch.pong, rbuf->data, rbuf->data_size);
+  void OnPing(const void* data, uint32_t size) {
+    lcm->publish(ch.pong, data, size);
     ++summary->pings;
   }
 
@@ -286,10 +289,10 @@ Bridge::Bridge(Engine* engine, const std::string& url, const Channels& channels,
   m.status = status_line;
   m.summary = &summary_;
   m.lcm = OpenLcm(url);
-  lcm::Subscription* sub = m.lcm->subscribe(channels.device, &Impl::OnDevicePacket, &m);
-  // LCM's default queue of 30 drops the newest messages at high rates: far above it.
-  sub->setQueueCapacity(10000);
-  m.lcm->subscribe(channels.ping, &Impl::OnPing, &m)->setQueueCapacity(10000);
+  m.subs = std::make_unique<LcmSubscriptions>(m.lcm.get());
+  m.subs->Raw(channels.device,
+              [&m](const void* data, uint32_t size) { m.OnDevicePacket(data, size); });
+  m.subs->Raw(channels.ping, [&m](const void* data, uint32_t size) { m.OnPing(data, size); });
   m.window_prev.assign(DurationHistogram::kBins + 1, 0);
   m.window_now.assign(DurationHistogram::kBins + 1, 0);
   m.window.assign(DurationHistogram::kBins + 1, 0);

@@ -22,6 +22,7 @@
 #include <tangent/loop_stats_t.hpp>
 #include <tangent/wrench_t.hpp>
 
+#include "server/lcm_subscriptions.h"
 #include "server/lockfree.h"
 #include "server/phantom.h"
 
@@ -67,7 +68,7 @@ struct Receiver {
   std::atomic<int> contacts{0};
   std::atomic<double> violation{0.0};
 
-  void OnWrench(const lcm::ReceiveBuffer*, const std::string&, const tangent::wrench_t* m) {
+  void OnWrench(const tangent::wrench_t* m) {
     // Only the wrenches of this client's own session (another client's, or a previous run's
     // still in flight, are not for this device).
     if (m->device_id != device_id || m->session != session) {
@@ -99,13 +100,13 @@ struct Receiver {
     w.received_ns = now;
     wrench.Write(w);
   }
-  void OnPong(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    if (rbuf->data_size != sizeof(int64_t)) return;
+  void OnPong(const void* data, uint32_t size) {
+    if (size != sizeof(int64_t)) return;
     int64_t sent;
-    std::memcpy(&sent, rbuf->data, sizeof(sent));
+    std::memcpy(&sent, data, sizeof(sent));
     ping_us.push_back(1e-3 * static_cast<double>(NowNs() - sent));
   }
-  void OnStats(const lcm::ReceiveBuffer*, const std::string&, const tangent::loop_stats_t* m) {
+  void OnStats(const tangent::loop_stats_t* m) {
     loop_rate.store(m->loop_rate_hz);
     contacts.store(m->num_contacts);
     violation.store(m->max_violation);
@@ -194,9 +195,11 @@ int main(int argc, char** argv) {
   rx.late_threshold_us = 1e6 / rate;
   rx.latency_us.reserve(static_cast<size_t>(duration * rate * 1.1) + 16);
   rx.answered_seq.reserve(rx.latency_us.capacity());
-  lcm.subscribe(wrench_ch, &Receiver::OnWrench, &rx)->setQueueCapacity(10000);
-  lcm.subscribe(pong_ch, &Receiver::OnPong, &rx)->setQueueCapacity(10000);
-  lcm.subscribe(stats_ch, &Receiver::OnStats, &rx);
+  tangent::server::LcmSubscriptions subs(&lcm);
+  subs.Typed<tangent::wrench_t>(wrench_ch, [&rx](const tangent::wrench_t& m) { rx.OnWrench(&m); });
+  subs.Raw(pong_ch, [&rx](const void* data, uint32_t size) { rx.OnPong(data, size); });
+  subs.Typed<tangent::loop_stats_t>(stats_ch,
+                                    [&rx](const tangent::loop_stats_t& m) { rx.OnStats(&m); });
   std::atomic<bool> rx_stop{false};
   std::thread rx_thread([&] {
     while (!rx_stop.load()) lcm.handleTimeout(5);

@@ -39,6 +39,8 @@
 #include <tangent/loop_stats_t.hpp>
 #include <tangent/wrench_t.hpp>
 
+#include "server/lcm_subscriptions.h"
+
 namespace {
 
 std::string g_tangentd, g_scene;
@@ -125,8 +127,11 @@ class Harness {
     ASSERT_TRUE(up) << "tangentd did not start";
     lcm_ = std::make_unique<lcm::LCM>(kUrl);
     ASSERT_TRUE(lcm_->good()) << "LCM did not start: run inside tests/server/in_netns.sh";
-    lcm_->subscribe("TANGENT_WRENCH", &Harness::OnWrench, this)->setQueueCapacity(1000000);
-    lcm_->subscribe("TANGENT_STATS", &Harness::OnStats, this)->setQueueCapacity(10000);
+    subs_ = std::make_unique<tangent::server::LcmSubscriptions>(lcm_.get());
+    subs_->Typed<tangent::wrench_t>(
+        "TANGENT_WRENCH", [this](const tangent::wrench_t& m) { OnWrench(m); }, 1000000);
+    subs_->Typed<tangent::loop_stats_t>("TANGENT_STATS",
+                                        [this](const tangent::loop_stats_t& m) { OnStats(m); });
     rx_ = std::thread([this] {
       while (!stop_.load()) lcm_->handleTimeout(5);
     });
@@ -276,19 +281,20 @@ class Harness {
   int64_t session = 0x5e55'1001;  ///< the served client's current session
 
  private:
-  void OnWrench(const lcm::ReceiveBuffer*, const std::string&, const tangent::wrench_t* m) {
+  void OnWrench(const tangent::wrench_t& m) {
     std::lock_guard<std::mutex> l(mutex_);
-    wrenches_.push_back({*m, NowNs()});
+    wrenches_.push_back({m, NowNs()});
   }
-  void OnStats(const lcm::ReceiveBuffer*, const std::string&, const tangent::loop_stats_t* m) {
+  void OnStats(const tangent::loop_stats_t& m) {
     std::lock_guard<std::mutex> l(mutex_);
-    stats_.emplace_back(*m, NowNs());
+    stats_.emplace_back(m, NowNs());
   }
 
   SceneFacts facts_;
   std::string dir_, out_;
   pid_t pid_ = -1;
   std::unique_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<tangent::server::LcmSubscriptions> subs_;
   std::thread rx_;
   std::atomic<bool> stop_{false};
   std::mutex mutex_;
