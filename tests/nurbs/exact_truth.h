@@ -14,31 +14,11 @@
 
 #include "nurbs/curve.h"
 #include "nurbs/surface.h"
+#include "tests/nurbs/high_precision.h"
 
 namespace tangent::nurbs::testing {
 
 using Q = mpq_class;
-
-// Blossom row of span mu at arguments x[0..p-1] (the Oslo alpha row), exactly.
-inline void BlossomRowExact(const KnotVector& k, int mu, const Q* x, Q* a) {
-  const int p = k.degree();
-  a[0] = 1;
-  for (int r = 1; r <= p; ++r) {
-    a[r] = 0;
-    for (int b = r; b >= 0; --b) {
-      Q value = 0;
-      if (b <= r - 1) {
-        const int i = mu - r + 1 + b;
-        value += a[b] * (Q(k[i + r]) - x[r - 1]) / (Q(k[i + r]) - Q(k[i]));
-      }
-      if (b >= 1) {
-        const int i = mu - r + b;
-        value += a[b - 1] * (x[r - 1] - Q(k[i])) / (Q(k[i + r]) - Q(k[i]));
-      }
-      a[b] = value;
-    }
-  }
-}
 
 /// S and its partials up to order 2 at (u, v) (clamped to the domain), exact until the final
 /// rounding to double.
@@ -57,11 +37,11 @@ inline SurfacePoint EvaluateExact(const NurbsSurface& s, double u_in, double v_i
   std::array<Q, kMaxDegree> x;
   for (int a = 0; a <= std::min(2, p); ++a) {
     for (int r = 0; r < p; ++r) x[static_cast<size_t>(r)] = r < p - a ? u : eu;
-    BlossomRowExact(ku, mu, x.data(), ru[static_cast<size_t>(a)].data());
+    BlossomRow<Q>(ku, mu, x.data(), ru[static_cast<size_t>(a)].data());
   }
   for (int b = 0; b <= std::min(2, q); ++b) {
     for (int r = 0; r < q; ++r) x[static_cast<size_t>(r)] = r < q - b ? v : ev;
-    BlossomRowExact(kv, nu, x.data(), rv[static_cast<size_t>(b)].data());
+    BlossomRow<Q>(kv, nu, x.data(), rv[static_cast<size_t>(b)].data());
   }
   using HQ = std::array<Q, 4>;
   HQ t[3][3];
@@ -131,7 +111,7 @@ CurvePoint<Dim> EvaluateExact(const NurbsCurve<Dim>& c, double t_in) {
     for (Q& v : b[static_cast<size_t>(a)]) v = 0;
     if (a > p) continue;
     for (int i = 0; i < p; ++i) x[static_cast<size_t>(i)] = i < p - a ? t : e;
-    BlossomRowExact(k, mu, x.data(), r[static_cast<size_t>(a)].data());
+    BlossomRow<Q>(k, mu, x.data(), r[static_cast<size_t>(a)].data());
     for (int i = 0; i <= p; ++i) {
       const auto& P = c.weighted_points()[static_cast<size_t>(mu - p + i)];
       for (int d = 0; d <= Dim; ++d) {

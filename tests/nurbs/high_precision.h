@@ -14,21 +14,23 @@ namespace tangent::nurbs::testing {
 using Real = long double;
 using HP = Eigen::Matrix<Real, 4, 1>;
 
-// Blossom row of span mu at arguments x[0..p-1], as OsloAlphaRow but in long double.
-inline void BlossomRowLD(const KnotVector& k, int mu, const Real* x, Real* a) {
+// Blossom row of span mu at arguments x[0..p-1], as OsloAlphaRow but in the arithmetic T (long
+// double here, GMP rationals in exact_truth.h).
+template <class T>
+void BlossomRow(const KnotVector& k, int mu, const T* x, T* a) {
   const int p = k.degree();
   a[0] = 1;
   for (int r = 1; r <= p; ++r) {
     a[r] = 0;
     for (int b = r; b >= 0; --b) {
-      Real value = 0;
+      T value = 0;
       if (b <= r - 1) {
         const int i = mu - r + 1 + b;
-        value += a[b] * (Real(k[i + r]) - x[r - 1]) / (Real(k[i + r]) - Real(k[i]));
+        value += a[b] * (T(k[i + r]) - x[r - 1]) / (T(k[i + r]) - T(k[i]));
       }
       if (b >= 1) {
         const int i = mu - r + b;
-        value += a[b - 1] * (x[r - 1] - Real(k[i])) / (Real(k[i + r]) - Real(k[i]));
+        value += a[b - 1] * (x[r - 1] - T(k[i])) / (T(k[i + r]) - T(k[i]));
       }
       a[b] = value;
     }
@@ -46,14 +48,14 @@ inline SurfacePoint EvaluateHighPrecision(const NurbsSurface& s, double u_in, do
   const Real eu = (ku[mu + 1] - u) >= (u - ku[mu]) ? Real(ku[mu + 1]) : Real(ku[mu]);
   const Real ev = (kv[nu + 1] - v) >= (v - kv[nu]) ? Real(kv[nu + 1]) : Real(kv[nu]);
   Real ru[3][kMaxDegree + 1] = {}, rv[3][kMaxDegree + 1] = {};
-  Real x[kMaxDegree];
+  Real x[kMaxDegree] = {};
   for (int a = 0; a <= std::min(2, p); ++a) {
     for (int r = 0; r < p; ++r) x[r] = r < p - a ? u : eu;
-    BlossomRowLD(ku, mu, x, ru[a]);
+    BlossomRow<Real>(ku, mu, x, ru[a]);
   }
   for (int b = 0; b <= std::min(2, q); ++b) {
     for (int r = 0; r < q; ++r) x[r] = r < q - b ? v : ev;
-    BlossomRowLD(kv, nu, x, rv[b]);
+    BlossomRow<Real>(kv, nu, x, rv[b]);
   }
   HP t[3][3];
   for (int a = 0; a < 3; ++a) {

@@ -40,12 +40,11 @@ inline KnotVector RandomKnots(std::mt19937_64& rng, int p, int n, bool clamped,
   return KnotVector(p, std::move(k));
 }
 
-inline NurbsSurface RandomSurface(std::mt19937_64& rng, int p, int q, int nu, int nv, bool rational,
-                                  bool clamped = true) {
+/// A gently curved random sheet on the given knot vectors (their basis counts set the net).
+inline NurbsSurface RandomSheet(std::mt19937_64& rng, KnotVector ku, KnotVector kv, bool rational) {
+  const int nu = ku.num_basis(), nv = kv.num_basis();
   std::uniform_real_distribution<double> coord(-1.0, 1.0);
   std::uniform_real_distribution<double> weight(0.5, 2.0);
-  KnotVector ku = RandomKnots(rng, p, nu, clamped);
-  KnotVector kv = RandomKnots(rng, q, nv, clamped);
   std::vector<Eigen::Vector3d> pts;
   std::vector<double> w;
   for (int i = 0; i < nu; ++i) {
@@ -56,6 +55,13 @@ inline NurbsSurface RandomSurface(std::mt19937_64& rng, int p, int q, int nu, in
     }
   }
   return NurbsSurface(std::move(ku), std::move(kv), pts, w);
+}
+
+inline NurbsSurface RandomSurface(std::mt19937_64& rng, int p, int q, int nu, int nv, bool rational,
+                                  bool clamped = true) {
+  KnotVector ku = RandomKnots(rng, p, nu, clamped);
+  KnotVector kv = RandomKnots(rng, q, nv, clamped);
+  return RandomSheet(rng, std::move(ku), std::move(kv), rational);
 }
 
 template <int Dim>

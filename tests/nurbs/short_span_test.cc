@@ -15,6 +15,7 @@
 #include "nurbs/refinement.h"
 #include "nurbs/surface.h"
 #include "tests/nurbs/exact_truth.h"
+#include "tests/nurbs/random_nurbs.h"
 
 namespace tangent::nurbs {
 namespace {
@@ -64,19 +65,9 @@ KnotVector Knots(int p, int n, Spacing spacing, double ratio, std::mt19937_64& r
 
 NurbsSurface Surface(int p, int q, bool rational, Spacing spacing, double ratio,
                      std::mt19937_64& rng) {
-  const int nu = p + 5, nv = q + 4;
-  KnotVector ku = Knots(p, nu, spacing, ratio, rng);
-  KnotVector kv = Knots(q, nv, spacing, ratio, rng);
-  std::uniform_real_distribution<double> coord(-1.0, 1.0), weight(0.5, 2.0);
-  std::vector<Eigen::Vector3d> pts;
-  std::vector<double> w;
-  for (int i = 0; i < nu; ++i) {
-    for (int j = 0; j < nv; ++j) {
-      pts.emplace_back(i + 0.3 * coord(rng), j + 0.3 * coord(rng), 0.5 * coord(rng));
-      if (rational) w.push_back(weight(rng));
-    }
-  }
-  return NurbsSurface(std::move(ku), std::move(kv), pts, w);
+  KnotVector ku = Knots(p, p + 5, spacing, ratio, rng);
+  KnotVector kv = Knots(q, q + 4, spacing, ratio, rng);
+  return testing::RandomSheet(rng, std::move(ku), std::move(kv), rational);
 }
 
 // One sample inside every span (so the short ones are always hit), alternately near its start
