@@ -20,6 +20,10 @@
 
 namespace tangent::server {
 
+/// Half extents of the default workspace box, device frame, m: a Touch-class stylus (160 × 120
+/// × 70 mm, DeviceModelOptions::workspace) with 25 % margin per side for calibration offsets.
+inline constexpr double kTouchWorkspace[3] = {0.1, 0.075, 0.045};
+
 /// A device state as received (plain data; the bridge copies the LCM message into it).
 struct DeviceReading {
   int64_t device_id = 0;
@@ -36,10 +40,9 @@ struct DeviceFilterOptions {
   std::optional<int64_t> device_id;
   double quaternion_tolerance = 1e-3;  ///< | |Q| − 1 | allowed
   /// Workspace box, device frame, m: positions outside are rejected. Default: a Touch-class
-  /// stylus (160 × 120 × 70 mm, DeviceModelOptions::workspace) with 25 % margin per side for
-  /// calibration offsets. Scenes set their device's box (docs/server.md).
-  double workspace_min[3] = {-0.1, -0.075, -0.045};
-  double workspace_max[3] = {0.1, 0.075, 0.045};
+  /// stylus (kTouchWorkspace). Scenes set their device's box (docs/server.md).
+  double workspace_min[3] = {-kTouchWorkspace[0], -kTouchWorkspace[1], -kTouchWorkspace[2]};
+  double workspace_max[3] = {kTouchWorkspace[0], kTouchWorkspace[1], kTouchWorkspace[2]};
   double max_speed = 5.0;         ///< m/s: faster than a hand moves a stylus
   double min_jump = 0.01;         ///< m: jumps below this are never implausible
   double reacquire_after = 0.25;  ///< s of silence (server clock) after which a jump is allowed

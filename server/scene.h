@@ -15,6 +15,7 @@
 #include "nurbs/surface.h"
 #include "optimizer/mechanism.h"
 #include "optimizer/term.h"
+#include "server/device_filter.h"
 
 namespace tangent::server {
 
@@ -79,9 +80,10 @@ struct DeviceSpec {
   double max_force_rate = 500.0;  ///< N/s
   double ramp_time = 1.0;         ///< s, force ramp at start-up and after a timeout
   /// The device's workspace box, device frame, m: states outside are rejected (DeviceFilter).
-  /// Default: a Touch-class stylus (160 × 120 × 70 mm) with 25 % margin per side.
-  Eigen::Vector3d workspace_min = Eigen::Vector3d(-0.1, -0.075, -0.045);
-  Eigen::Vector3d workspace_max = Eigen::Vector3d(0.1, 0.075, 0.045);
+  /// Default: kTouchWorkspace.
+  Eigen::Vector3d workspace_max =
+      Eigen::Vector3d(kTouchWorkspace[0], kTouchWorkspace[1], kTouchWorkspace[2]);
+  Eigen::Vector3d workspace_min = -workspace_max;
   /// Speed at which the grasp target follows the stylus, m/s in the device frame (× scale in
   /// the scene): a hand's fast moves (≤ 1 m/s) are followed at once, a jump becomes a
   /// continuous path, and meanwhile the coupling force tells the hand where the part is.
