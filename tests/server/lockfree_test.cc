@@ -15,27 +15,31 @@ struct Big {
 };
 
 TEST(LockFreeTest, SeqlockReadersNeverSeeATornValue) {
+  // The writer goes on until the reader has overlapped it many times: on a loaded machine the
+  // reader thread may not be scheduled at all during a fixed number of writes.
+  constexpr long kMinWrites = 200000, kMinReads = 20000;
   Seqlock<Big> lock;
   std::atomic<bool> done{false};
+  std::atomic<long> reads{0};
   std::thread writer([&] {
     Big b;
-    for (long k = 1; k <= 200000; ++k) {
+    for (long k = 1; k <= kMinWrites || reads.load(std::memory_order_relaxed) < kMinReads; ++k) {
       for (long& x : b.a) x = k;
       lock.Write(b);
     }
     done = true;
   });
-  long torn = 0, reads = 0, last = 0, backwards = 0;
+  long torn = 0, last = 0, backwards = 0;
   Big b;
   while (!done) {
     if (lock.Read(&b) == 0) continue;
-    ++reads;
+    reads.fetch_add(1, std::memory_order_relaxed);
     for (long x : b.a) torn += x != b.a[0];
     backwards += b.a[0] < last;
     last = b.a[0];
   }
   writer.join();
-  EXPECT_GT(reads, 0);
+  EXPECT_GE(reads.load(), kMinReads);
   EXPECT_EQ(torn, 0);
   EXPECT_EQ(backwards, 0);
 }
