@@ -6,6 +6,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
 #include <array>
@@ -17,6 +18,7 @@ namespace tangent::contact::internal {
 /// gradient / Hessian of ½|d|², used when some parameters sit on the domain boundary.
 template <int N>
 struct NewtonSystem {
+  double value = 0.0;  ///< ½|d|², the objective of the bound-constrained minimization
   Eigen::Matrix<double, N, 1> F;
   Eigen::Matrix<double, N, N> J;
   Eigen::Matrix<double, N, 1> grad;
@@ -25,6 +27,11 @@ struct NewtonSystem {
   /// matrix whose entries are all below kSingularRcond · scale is singular even when it is
   /// well conditioned relative to itself (a focal point shrinks a Hessian isotropically).
   double scale = 0.0;
+  /// The scale Classify compares the Hessian's pivots with (the first fundamental forms').
+  double classify_scale = 0.0;
+  /// The pair interpenetrates here (its extremum of interest is then a saddle of ½|d|², which
+  /// the bound-constrained minimization must not replace with the crossing's zero distance).
+  bool penetrating = false;
 };
 
 /// Reciprocal condition below which a Newton or Jacobian matrix counts as singular: u_q solved
@@ -73,7 +80,22 @@ struct BoxNewtonOptions {
   /// Parameters of closed (periodic) directions: they wrap around the domain instead of
   /// stopping on its edge (a seam is not a boundary).
   std::array<bool, N> periodic{};
+  /// Parameters held on their bound from the start (they must lie on it).
+  std::array<bool, N> initial_active{};
+  /// The release test for a held parameter. false: the interior Newton step on F points back
+  /// into the domain (any extremum kind). true: the multiplier sign of a minimum of ½|d|², i.e.
+  /// the gradient points inward (−∂φ/∂x_i > 0 at a lower bound, < 0 at an upper one).
+  bool release_by_gradient = false;
 };
+
+/// Whether a held parameter's multiplier has the sign of a minimum: at a lower bound the
+/// objective must grow inward (∂φ/∂x_i ≥ 0), at an upper bound ∂φ/∂x_i ≤ 0.
+template <int N>
+bool HoldsAsMinimum(const Eigen::Matrix<double, N, 1>& x, const Eigen::Matrix<double, N, 1>& grad,
+                    const Eigen::Matrix<double, N, 1>& lo, const Eigen::Matrix<double, N, 1>& hi,
+                    int i) {
+  return (x[i] <= lo[i] && grad[i] >= 0.0) || (x[i] >= hi[i] && grad[i] <= 0.0);
+}
 
 /// x with periodic components wrapped into [lo, hi) and the others clamped to [lo, hi].
 template <int N>
@@ -143,6 +165,11 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
   res.x = ClampOrWrap<N>(x0, lo, hi, periodic);
   const Vec width = (hi - lo).cwiseMax(1e-300);
   NewtonSystem<N> sys;
+  for (int i = 0; i < N; ++i) {
+    const size_t k = static_cast<size_t>(i);
+    res.active[k] =
+        opt.initial_active[k] && !periodic[k] && (res.x[i] <= lo[i] || res.x[i] >= hi[i]);
+  }
   eval(res.x, &sys);
   int releases = 0;
   for (res.iterations = 0; res.iterations < opt.max_iterations; ++res.iterations) {
@@ -192,14 +219,18 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
     // Converged for the current active set. Release a boundary parameter when the interior
     // Newton step points back into the domain (the extremum is not on this boundary).
     if (any && releases < 2 * N) {
-      double rc = 0.0;
-      bool sing = false;
-      const Vec free_step = NewtonStep<N>(sys.F, sys.J, sys.scale, &sing, &rc);
+      Vec free_step = Vec::Zero();
+      if (!opt.release_by_gradient) {
+        double rc = 0.0;
+        bool sing = false;
+        free_step = NewtonStep<N>(sys.F, sys.J, sys.scale, &sing, &rc);
+      }
       bool released = false;
       for (int i = 0; i < N; ++i) {
         if (!res.active[static_cast<size_t>(i)]) continue;
-        const bool inward =
-            (res.x[i] <= lo[i] && free_step[i] > 0) || (res.x[i] >= hi[i] && free_step[i] < 0);
+        const bool inward = opt.release_by_gradient ? !HoldsAsMinimum<N>(res.x, sys.grad, lo, hi, i)
+                                                    : (res.x[i] <= lo[i] && free_step[i] > 0) ||
+                                                          (res.x[i] >= hi[i] && free_step[i] < 0);
         if (inward) {
           res.active[static_cast<size_t>(i)] = false;
           released = true;
@@ -213,6 +244,102 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
     res.converged = true;
     ++res.iterations;
     break;
+  }
+  return res;
+}
+
+/// Minimizes φ = ½|d|² over the box by projected Newton (Bertsekas 1982): parameters on a bound
+/// whose gradient points out of the box move by projected gradient, the others by Newton on a
+/// Hessian made positive definite (eigenvalues replaced by their magnitudes, so a saddle is left
+/// along its negative curvature), along the projection arc with an Armijo test on φ. It only
+/// descends, so from any start it ends at a point satisfying the box's first-order conditions
+/// (free gradient zero, held gradients pointing out): the interior, edge or corner minimum of
+/// the basin it starts in. Linear at a touching pair (φ's Hessian has rank 2 there), so callers
+/// polish with BoxNewton from its result. `active` on return: the parameters it holds.
+template <int N, class Eval>
+BoxNewtonResult<N> BoxMinimize(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
+                               const Eigen::Matrix<double, N, 1>& lo,
+                               const Eigen::Matrix<double, N, 1>& hi,
+                               const BoxNewtonOptions<N>& opt) {
+  using Vec = Eigen::Matrix<double, N, 1>;
+  using Mat = Eigen::Matrix<double, N, N>;
+  const auto& periodic = opt.periodic;
+  BoxNewtonResult<N> res;
+  res.x = ClampOrWrap<N>(x0, lo, hi, periodic);
+  const Vec width = (hi - lo).cwiseMax(1e-300);
+  NewtonSystem<N> sys, trial_sys;
+  eval(res.x, &sys);
+  auto holds = [&](const Vec& x, const Vec& g, int i, double eps) {
+    if (periodic[static_cast<size_t>(i)]) return false;
+    return (x[i] - lo[i] <= eps && g[i] > 0.0) || (hi[i] - x[i] <= eps && g[i] < 0.0);
+  };
+  const int budget = 4 * opt.max_iterations;
+  for (res.iterations = 0; res.iterations < budget; ++res.iterations) {
+    const Vec& g = sys.grad;
+    // Diagonal scaling for the held parameters' gradient steps.
+    const double floor = std::max(1e-12 * sys.hess.diagonal().cwiseAbs().maxCoeff(), 1e-300);
+    Vec dscale;
+    for (int i = 0; i < N; ++i) dscale[i] = 1.0 / std::max(std::abs(sys.hess(i, i)), floor);
+    // ε-active set: on a bound or within the projected-gradient step of it, gradient outward.
+    const Vec pg = ClampOrWrap<N>(res.x - dscale.cwiseProduct(g), lo, hi, periodic) - res.x;
+    std::array<bool, N> held{};
+    for (int i = 0; i < N; ++i) {
+      const double eps = std::min(1e-3 * width[i], std::abs(pg[i]) + 1e-15 * width[i]);
+      held[static_cast<size_t>(i)] = holds(res.x, g, i, eps);
+    }
+    Mat h = sys.hess;
+    for (int i = 0; i < N; ++i) {
+      if (!held[static_cast<size_t>(i)]) continue;
+      h.row(i).setZero();
+      h.col(i).setZero();
+      h(i, i) = 1.0;
+    }
+    const Eigen::SelfAdjointEigenSolver<Mat> eig(h);
+    Vec lam = eig.eigenvalues().cwiseAbs();
+    const double lam_floor = std::max(1e-10 * lam.maxCoeff(), 1e-300);
+    lam = lam.cwiseMax(lam_floor);
+    Vec gf = g;
+    for (int i = 0; i < N; ++i) {
+      if (held[static_cast<size_t>(i)]) gf[i] = 0.0;
+    }
+    Vec step = -(eig.eigenvectors() * (eig.eigenvectors().transpose() * gf).cwiseQuotient(lam));
+    for (int i = 0; i < N; ++i) {
+      if (held[static_cast<size_t>(i)]) step[i] = -dscale[i] * g[i];
+    }
+    if (!step.allFinite()) break;
+    // Armijo along the projection arc.
+    double alpha = 1.0;
+    Vec trial = res.x;
+    bool accepted = false;
+    for (int k = 0; k < 40; ++k) {
+      trial = ClampOrWrap<N>(res.x + alpha * step, lo, hi, periodic);
+      Vec moved = trial - res.x;
+      for (int i = 0; i < N; ++i) {  // a wrapped periodic move counts by its short way round
+        if (periodic[static_cast<size_t>(i)]) moved[i] = alpha * step[i];
+      }
+      eval(trial, &trial_sys);
+      const double decrease = g.dot(moved);
+      if (trial_sys.value <= sys.value + 1e-4 * decrease && decrease <= 0.0) {
+        accepted = true;
+        break;
+      }
+      alpha *= 0.5;
+    }
+    const double moved = (trial - res.x).cwiseQuotient(width).cwiseAbs().maxCoeff();
+    if (!accepted) break;  // no descent left at this precision: a first-order point
+    res.x = trial;
+    sys = trial_sys;
+    if (moved < opt.step_tolerance) {
+      res.converged = true;
+      ++res.iterations;
+      break;
+    }
+  }
+  // The held set at the end: on a bound with the gradient pointing out.
+  for (int i = 0; i < N; ++i) {
+    res.active[static_cast<size_t>(i)] = !periodic[static_cast<size_t>(i)] &&
+                                         HoldsAsMinimum<N>(res.x, sys.grad, lo, hi, i) &&
+                                         (res.x[i] <= lo[i] || res.x[i] >= hi[i]);
   }
   return res;
 }

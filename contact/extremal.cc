@@ -1,5 +1,6 @@
 #include "contact/extremal.h"
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -38,6 +39,15 @@ const char* ToString(ExtremumKind k) {
       return "degenerate";
   }
   return "?";
+}
+
+double BoundarySide(const Eigen::Vector3d& d, const Eigen::Vector3d& n_f,
+                    const Eigen::Vector3d& n_g) {
+  const double nf = n_f.norm(), ng = n_g.norm();
+  const double along_g = ng > 0.0 ? d.dot(n_g) / ng : 0.0;
+  const double along_f = nf > 0.0 ? d.dot(n_f) / nf : 0.0;
+  const double side = std::abs(along_g) >= std::abs(along_f) ? along_g : -along_f;
+  return side < 0.0 ? -1.0 : 1.0;
 }
 
 namespace internal {
@@ -150,6 +160,93 @@ Eigen::Vector2d Hi(const nurbs::NurbsSurface& s) {
   return {s.knots_u().domain_end(), s.knots_v().domain_end()};
 }
 
+// The kind of a box extremum: the inertia on the free parameters (Classify); at a vertex of the
+// box (nothing free) the held multipliers' signs decide: all of a minimum's, a minimum; all of a
+// maximum's, a maximum; mixed, a saddle.
+template <int N>
+ExtremumKind KindAt(const internal::BoxNewtonResult<N>& r, const internal::NewtonSystem<N>& s,
+                    const Eigen::Matrix<double, N, 1>& lo, const Eigen::Matrix<double, N, 1>& hi) {
+  if (!std::all_of(r.active.begin(), r.active.end(), [](bool b) { return b; }))
+    return internal::Classify<N>(s.hess, r.active, s.classify_scale);
+  int as_min = 0;
+  for (int i = 0; i < N; ++i) as_min += internal::HoldsAsMinimum<N>(r.x, s.grad, lo, hi, i);
+  if (as_min == N) return ExtremumKind::kMinimum;
+  if (as_min == 0) return ExtremumKind::kMaximum;
+  return ExtremumKind::kSaddle;
+}
+
+// A result that is a minimum of ½|d|² on the box: converged, regular, every held parameter's
+// multiplier of a minimum's sign, and the Hessian on the free parameters positive (semi)definite.
+template <int N>
+bool IsBoxMinimum(const internal::BoxNewtonResult<N>& r, const internal::NewtonSystem<N>& s,
+                  const Eigen::Matrix<double, N, 1>& lo, const Eigen::Matrix<double, N, 1>& hi) {
+  if (!r.converged || r.singular) return false;
+  for (int i = 0; i < N; ++i) {
+    if (r.active[static_cast<size_t>(i)] && !internal::HoldsAsMinimum<N>(r.x, s.grad, lo, hi, i))
+      return false;
+  }
+  return KindAt<N>(r, s, lo, hi) == ExtremumKind::kMinimum;
+}
+
+// A regular interior extremum of an interpenetrating pair: the penetration extremum.
+template <int N>
+bool IsPenetration(const internal::BoxNewtonResult<N>& r, const internal::NewtonSystem<N>& s) {
+  return r.converged && !r.singular && s.penetrating &&
+         std::none_of(r.active.begin(), r.active.end(), [](bool b) { return b; });
+}
+
+// What Seek::kMinimum accepts: a box minimum, or the penetration extremum.
+template <int N>
+bool Acceptable(const internal::BoxNewtonResult<N>& r, const internal::NewtonSystem<N>& s,
+                const Eigen::Matrix<double, N, 1>& lo, const Eigen::Matrix<double, N, 1>& hi) {
+  return IsBoxMinimum<N>(r, s, lo, hi) || IsPenetration<N>(r, s);
+}
+
+// Newton from the seed; under Seek::kMinimum, when that does not end at an acceptable extremum,
+// the bound-constrained minimization from the same seed and a Newton polish on its active face
+// (release by the multipliers' sign). `eval` must leave the problem's own evaluation state at
+// the last point it was called with: on return that is the returned r.x.
+template <int N, class Eval>
+internal::BoxNewtonResult<N> SolveOnBox(Eval&& eval, const Eigen::Matrix<double, N, 1>& seed,
+                                        const Eigen::Matrix<double, N, 1>& lo,
+                                        const Eigen::Matrix<double, N, 1>& hi,
+                                        const internal::BoxNewtonOptions<N>& opt, Seek seek,
+                                        internal::NewtonSystem<N>* at_x) {
+  internal::NewtonSystem<N> last;
+  double seed_value = -1.0;  // ½|d|² at the (clamped) seed: BoxNewton's first evaluation
+  auto recorded = [&](const Eigen::Matrix<double, N, 1>& x, internal::NewtonSystem<N>* s) {
+    eval(x, s);
+    last = *s;
+    if (seed_value < 0.0) seed_value = s->value;
+  };
+  internal::BoxNewtonResult<N> first = internal::BoxNewton<N>(recorded, seed, lo, hi, opt);
+  // A minimum farther apart than the seed's own pair lies in another basin: Newton on F is not
+  // a descent method and can cross to it. (A penetration extremum may be deeper than the seed.)
+  const bool uphill = last.value > seed_value * (1.0 + 1e-12) + 1e-300;
+  if (seek == Seek::kNearest || (IsBoxMinimum<N>(first, last, lo, hi) && !uphill) ||
+      IsPenetration<N>(first, last)) {
+    *at_x = last;
+    return first;
+  }
+  const internal::BoxNewtonResult<N> m = internal::BoxMinimize<N>(recorded, seed, lo, hi, opt);
+  internal::BoxNewtonOptions<N> polish = opt;
+  polish.initial_active = m.active;
+  polish.release_by_gradient = true;
+  internal::BoxNewtonResult<N> second = internal::BoxNewton<N>(recorded, m.x, lo, hi, polish);
+  const int iterations = first.iterations + m.iterations + second.iterations;
+  if (Acceptable<N>(second, last, lo, hi)) {
+    second.iterations = iterations;
+    *at_x = last;
+    return second;
+  }
+  // Neither is a minimum: keep Newton's answer and its honest flags.
+  internal::NewtonSystem<N> again;
+  eval(first.x, &again);
+  *at_x = again;
+  first.iterations = iterations;
+  return first;
+}
+
 }  // namespace
 
 namespace {
@@ -195,6 +292,7 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
     out.beta = std::numeric_limits<double>::infinity();
     out.p_g.setZero();
     out.n_g = Eigen::Vector3d::UnitZ();
+    out.direction = out.n_g;
     out.frame_g.setIdentity();
     out.alignment = -1.0;
     return out;
@@ -203,19 +301,23 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   SurfacePairEval e;
   auto eval = [&](const Eigen::Vector4d& x, internal::NewtonSystem<4>* s) {
     EvaluatePair(f, pose_f, g, pose_g, x, &hf, &hg, &e);
+    s->value = 0.5 * e.d.squaredNorm();
     s->F = e.F;
     s->J = e.F_u;
     s->grad = e.grad;
     s->hess = e.hess;
+    s->classify_scale = std::max(FirstFormScale(e.f.world), FirstFormScale(e.g.world));
+    // Each inside the other (facing normals): not a spurious saddle of a separated pair.
+    s->penetrating = e.d.dot(e.g.N) < 0.0 && e.d.dot(e.f.N) > 0.0;
   };
   Eigen::Vector4d lo, hi;
   lo << Lo(f), Lo(g);
   hi << Hi(f), Hi(g);
   auto opt = Convert<4>(options);
   opt.periodic = {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()};
-  const auto r = internal::BoxNewton<4>(eval, seed, lo, hi, opt);
-  // BoxNewton's last evaluation is at r.x (it only ever moves to a point it has just evaluated):
-  // e is the pair there.
+  internal::NewtonSystem<4> sys;
+  const auto r = SolveOnBox<4>(eval, seed, lo, hi, opt, options.seek, &sys);
+  // e is the pair at r.x (SolveOnBox's contract).
   SurfaceSurfaceExtremum out;
   out.u = r.x;
   out.p_f = e.f.world.S;
@@ -223,12 +325,19 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   out.frame_f = ContactFrame(e.f);
   out.frame_g = ContactFrame(e.g);
   out.n_g = out.frame_g.col(2);
-  out.beta = e.d.dot(out.n_g);
+  out.at_bound = r.active;
+  const double dist = e.d.norm();
+  if (std::any_of(r.active.begin(), r.active.end(), [](bool b) { return b; }) && dist > 0.0) {
+    const double side = BoundarySide(e.d, e.f.N, e.g.N);
+    out.direction = side * (e.d / dist);
+    out.beta = side * dist;
+  } else {
+    out.direction = out.n_g;
+    out.beta = e.d.dot(out.n_g);
+  }
   out.alignment = e.f.N.normalized().dot(out.n_g);
   out.status = StatusOf(r);
-  out.kind = internal::Classify<4>(e.hess, r.active,
-                                   std::max(FirstFormScale(e.f.world), FirstFormScale(e.g.world)));
-  out.at_bound = r.active;
+  out.kind = KindAt<4>(r, sys, lo, hi);
   out.iterations = r.iterations;
   out.rcond = r.rcond;
   if (at_solution) *at_solution = e;
@@ -250,29 +359,32 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
     EvaluatePlaced(f, pose_f, x[0], x[1], &hf, &p);
     const nurbs::SurfacePoint& a = p.world;
     const Eigen::Vector3d d = a.S - x_W;
+    s->value = 0.5 * d.squaredNorm();
     s->grad << d.dot(a.S_u), d.dot(a.S_v);
     s->hess << a.S_u.dot(a.S_u) + d.dot(a.S_uu), a.S_u.dot(a.S_v) + d.dot(a.S_uv),
         a.S_u.dot(a.S_v) + d.dot(a.S_uv), a.S_v.dot(a.S_v) + d.dot(a.S_vv);
     s->F = s->grad;  // Regular at d = 0 already: one system inside and on the boundary.
     s->J = s->hess;
     s->scale = FirstFormScale(a);
+    s->classify_scale = s->scale;
+    s->penetrating = false;  // a point's nearest surface point is a minimum on either side
   };
   auto opt = Convert<2>(options);
   opt.periodic = {f.periodic_u(), f.periodic_v()};
   internal::NewtonSystem<2> s;
-  const auto r = internal::BoxNewton<2>(
-      [&](const Eigen::Vector2d& x, internal::NewtonSystem<2>* sys) {
-        eval(x, sys);
-        s = *sys;  // the last evaluation is at r.x (see SolveSurfaceSurface)
-      },
-      seed, Lo(f), Hi(f), opt);
+  const auto r = SolveOnBox<2>(eval, seed, Lo(f), Hi(f), opt, options.seek, &s);
   PointSurfaceExtremum out;
   out.u = r.x;
   out.p_f = p.world.S;
   out.frame_f = ContactFrame(p);
-  out.distance = (x_W - p.world.S).dot(out.frame_f.col(2));
+  const Eigen::Vector3d d = x_W - p.world.S;
+  out.distance = d.dot(out.frame_f.col(2));
+  if (std::any_of(r.active.begin(), r.active.end(), [](bool b) { return b; })) {
+    // Side by f's normal (x outside: positive), |x − f| in size.
+    out.distance = (out.distance < 0.0 ? -1.0 : 1.0) * d.norm();
+  }
   out.status = StatusOf(r);
-  out.kind = internal::Classify<2>(s.hess, r.active, s.scale);
+  out.kind = KindAt<2>(r, s, Lo(f), Hi(f));
   out.at_bound = r.active;
   out.iterations = r.iterations;
   if (at_solution) *at_solution = p;
@@ -323,27 +435,32 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
   CurveSurfaceEval e;
   auto eval = [&](const Eigen::Vector3d& x, internal::NewtonSystem<3>* s) {
     EvaluateCurveSurface(f, pose_f, g, pose_g, x, &hf, &span_g, &hg, &e);
+    s->value = 0.5 * e.d.squaredNorm();
     s->F = e.F;
     s->J = e.F_u;
     s->grad = e.grad;
     s->hess = e.hess;
+    s->classify_scale = std::max(FirstFormScale(e.f.world), e.g.world.C1.squaredNorm());
+    s->penetrating = e.d.dot(e.f.N) < 0.0;
   };
   Eigen::Vector3d lo, hi;
   lo << Lo(f), g.domain_begin();
   hi << Hi(f), g.domain_end();
   auto opt = Convert<3>(options);
   opt.periodic = {f.periodic_u(), f.periodic_v(), false};
-  const auto r = internal::BoxNewton<3>(eval, seed, lo, hi, opt);
-  EvaluateCurveSurface(f, pose_f, g, pose_g, r.x, &hf, &span_g, &hg, &e);
+  internal::NewtonSystem<3> sys;
+  const auto r = SolveOnBox<3>(eval, seed, lo, hi, opt, options.seek, &sys);
   CurveSurfaceExtremum out;
   out.u = r.x;
   out.p_f = e.f.world.S;
   out.p_g = e.g.world.C;
   out.frame_f = ContactFrame(e.f);
   out.beta = e.d.dot(out.frame_f.col(2));
+  if (std::any_of(r.active.begin(), r.active.end(), [](bool b) { return b; })) {
+    out.beta = (out.beta < 0.0 ? -1.0 : 1.0) * e.d.norm();
+  }
   out.status = StatusOf(r);
-  out.kind = internal::Classify<3>(e.hess, r.active,
-                                   std::max(FirstFormScale(e.f.world), e.g.world.C1.squaredNorm()));
+  out.kind = KindAt<3>(r, sys, lo, hi);
   out.at_bound = r.active;
   out.iterations = r.iterations;
   return out;
@@ -358,10 +475,9 @@ Eigen::Vector4d ClosestSamplePair(const nurbs::NurbsSurface& f, const BodyPose& 
     const auto& kv = s.knots_v();
     for (int i = 0; i <= n; ++i) {
       for (int j = 0; j <= n; ++j) {
-        const double u =
-            ku.domain_begin() + (ku.domain_end() - ku.domain_begin()) * (i + 0.5) / (n + 1);
-        const double v =
-            kv.domain_begin() + (kv.domain_end() - kv.domain_begin()) * (j + 0.5) / (n + 1);
+        // Edges and corners included: a minimum on the boundary has its nearest sample there.
+        const double u = ku.domain_begin() + (ku.domain_end() - ku.domain_begin()) * i / n;
+        const double v = kv.domain_begin() + (kv.domain_end() - kv.domain_begin()) * j / n;
         pts.push_back({{u, v}, p.Point(s.Evaluate(u, v, 0).S)});
       }
     }

@@ -27,9 +27,25 @@ enum class ExtremumKind { kMinimum, kSaddle, kMaximum, kDegenerate };
 const char* ToString(ExtremalStatus s);
 const char* ToString(ExtremumKind k);
 
+/// Which extremum a solve looks for.
+enum class Seek {
+  /// The extremum of the distance a contact means: a minimum, interior or on the domain's
+  /// boundary (an edge, a corner), for separated or touching pairs; for interpenetrating pairs
+  /// the penetration extremum Newton converges to from the seed (a saddle of ½|d|²). When
+  /// Newton from the seed ends elsewhere (a saddle or maximum of a separated pair, a boundary
+  /// point whose multiplier has the wrong sign, no convergence), a bound-constrained
+  /// minimization (projected Newton, then a Newton polish on the active face) restarts from the
+  /// seed and its answer is taken if it is a minimum.
+  kMinimum,
+  /// Whatever extremum Newton converges to from the seed (any kind; boundary parameters
+  /// released when the interior step points back inside). For tests and classification.
+  kNearest,
+};
+
 struct ExtremalOptions {
   int max_iterations = 40;
   double step_tolerance = 1e-13;  ///< Newton step / domain width; ~500 ulp of a unit domain
+  Seek seek = Seek::kMinimum;
 };
 
 /// Everything about a surface pair at parameters u = (u, v, s, t) and poses, in the world:
@@ -58,8 +74,13 @@ void FillGradientForm(SurfacePairEval* e);
 
 /// An extremal pair of points of two surfaces.
 struct SurfaceSurfaceExtremum {
-  Eigen::Vector4d u;         ///< (u, v) on f, (s, t) on g, inside both domains
-  double beta = 0.0;         ///< signed distance d·n_g: > 0 apart, < 0 interpenetrating (m)
+  Eigen::Vector4d u;  ///< (u, v) on f, (s, t) on g, inside both domains
+  /// Signed distance (m): > 0 apart, < 0 interpenetrating. d·n_g at an interior extremum; at a
+  /// boundary one (d no longer along a normal) |d| signed by the side (BoundarySide).
+  double beta = 0.0;
+  /// Unit vector along which beta is measured (beta = d·direction): n_g at an interior
+  /// extremum, ±d/|d| at a boundary one (n_g when d = 0).
+  Eigen::Vector3d direction;
   Eigen::Vector3d p_f, p_g;  ///< contact points, world (m)
   Eigen::Vector3d n_g;       ///< unit outward normal of g at p_g, world
   Eigen::Matrix3d frame_f;   ///< contact frame of f at p_f (ContactFrame; NaN at a pole)
@@ -73,7 +94,8 @@ struct SurfaceSurfaceExtremum {
 };
 
 /// A seed (u, v, s, t) for SolveSurfaceSurface: the closest pair among (n+1) x (n+1) samples of
-/// each placed surface (cell centres of an even parameter grid); *distance gets their distance.
+/// each placed surface (an even parameter grid with its edges and corners, n ≥ 1); *distance
+/// gets their distance.
 /// For loading and tests (it allocates and costs (n+1)^4 distance evaluations).
 Eigen::Vector4d ClosestSamplePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                                   const nurbs::NurbsSurface& g, const BodyPose& pose_g, int n,
@@ -93,7 +115,9 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
 /// equations [d·f_u, d·f_v] (regular at d = 0, where the Jacobian is the first fundamental form).
 struct PointSurfaceExtremum {
   Eigen::Vector2d u;
-  double distance = 0.0;  ///< (x − f)·n_f: > 0 when x is on the outward side (m)
+  /// (x − f)·n_f: > 0 when x is on the outward side (m); at a boundary extremum |x − f| signed
+  /// by that side.
+  double distance = 0.0;
   Eigen::Vector3d p_f;
   Eigen::Matrix3d frame_f;  ///< contact frame of f at p_f
   ExtremalStatus status = ExtremalStatus::kNotConverged;
@@ -124,7 +148,9 @@ void EvaluateCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f, 
 
 struct CurveSurfaceExtremum {
   Eigen::Vector3d u;  ///< (u, v) on f, τ on the curve
-  double beta = 0.0;  ///< (g − f)·n_f: > 0 when the curve is outside f (m)
+  /// (g − f)·n_f: > 0 when the curve is outside f (m); at a boundary extremum |g − f| signed by
+  /// that side.
+  double beta = 0.0;
   Eigen::Vector3d p_f, p_g;
   Eigen::Matrix3d frame_f;  ///< contact frame of f at p_f
   ExtremalStatus status = ExtremalStatus::kNotConverged;
@@ -136,6 +162,12 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
                                        const BodyCurve& g, const BodyPose& pose_g,
                                        const Eigen::Vector3d& seed,
                                        const ExtremalOptions& options = {});
+
+/// The sign of a boundary extremum's distance: which side of the surfaces d = f − g lies on.
+/// By g's normal when d is more along it than along f's, else by f's (d·n_f < 0 is apart for a
+/// facing pair); +1 when d = 0. At an interior extremum, where d ∥ n_g, it is sign(d·n_g).
+double BoundarySide(const Eigen::Vector3d& d, const Eigen::Vector3d& n_f,
+                    const Eigen::Vector3d& n_g);
 
 namespace internal {
 /// Kind from the eigenvalues of a Hessian restricted to the free parameters; eigenvalues below

@@ -1,5 +1,6 @@
 #include "optimizer/contacts.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "contact/contact_jacobian.h"
@@ -75,8 +76,11 @@ void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref
   Update(poses);
   const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
   const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
-  const Eigen::Vector3d n = eval_.g.N.normalized();
-  r[0] = eval_.d.dot(n);
+  // β along the direction the extremum measures it: g's normal at an interior extremum, the
+  // line between the points at an edge or corner one (where d is not along a normal). Either
+  // way ∂β/∂q = n·∂(f − g)/∂q at fixed parameters (the free parameters are stationary).
+  const Eigen::Vector3d& n = ext_.direction;
+  r[0] = ext_.beta;
   J_a = n.transpose() * contact::PointJacobian(pf, eval_.f.body.S);
   J_b = -n.transpose() * contact::PointJacobian(pg, eval_.g.body.S);
 }
@@ -88,7 +92,24 @@ void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses,
   Update(poses);
   const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
   const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
-  const Eigen::Vector3d n = eval_.g.N.normalized();
+  const Eigen::Vector3d& n = ext_.direction;
+  const bool at_bound =
+      std::any_of(ext_.at_bound.begin(), ext_.at_bound.end(), [](bool b) { return b; });
+  if (at_bound) {
+    // An edge or corner extremum: β = |d| signed. Its Hessian at fixed parameters is
+    // P'(I − nn')P/|β| plus the rotations' curvature; the free parameters' motion along the
+    // edge is left out (a Gauss–Newton-like model: contacts at trims and edges, issue 16, get
+    // the edge's own constraint).
+    Eigen::Matrix<double, 3, 14> P;
+    P << contact::PointJacobian(pf, eval_.f.body.S), -contact::PointJacobian(pg, eval_.g.body.S);
+    const double dist = std::max(std::abs(ext_.beta), 1e-12);
+    const Matrix14 H =
+        P.transpose() * ((Eigen::Matrix3d::Identity() - n * n.transpose()) / dist) * P;
+    Split(H * (ext_.beta < 0.0 ? -1.0 : 1.0), w[0], h);
+    h->W_a.noalias() += (w[0] * n) * eval_.f.body.S.transpose();
+    h->W_b.noalias() -= (w[0] * n) * eval_.g.body.S.transpose();
+    return;
+  }
   contact::Matrix4x14 u_q;
   const bool regular = contact::ContactJacobianClosedForm(eval_, pf, pg, &u_q);
   if (!regular) u_q.setZero();

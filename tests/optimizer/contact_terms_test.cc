@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <numbers>
 #include <random>
 
 #include "nurbs/primitives.h"
@@ -98,6 +100,59 @@ TEST(ContactTermsTest, SurfaceContactDerivativesMatchFiniteDifferences) {
       EXPECT_NEAR(beta, gap, 0.015);  // the bump and the offsets move it by millimetres
       CheckDerivatives(s.mech, *term, q, 1e-8, 2e-6);
     }
+  }
+}
+
+// Two unit squares, f beside and above g, closest corner to corner: β is the distance between
+// the corners and every parameter is held, so the value, the Jacobian and the Hessian are
+// exact there (no free parameter moves with q). An edge against a face (f tipped over g): the
+// Jacobian is exact; the Hessian leaves out the edge parameter's motion (contacts.cc).
+TEST(ContactTermsTest, BoundaryContactDerivativesMatchFiniteDifferences) {
+  Mechanism mech;
+  const int a = mech.AddBody(Body{"upper"}), b = mech.AddBody(Body{"lower"});
+  const nurbs::NurbsSurface square = nurbs::MakePlanePatch({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  std::mt19937_64 rng(43);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 4; ++trial) {
+    // f turned over (facing g) and perturbed.
+    const Eigen::Quaterniond qa =
+        Eigen::Quaterniond(1, 0.05 * u(rng), 0.05 * u(rng), 0.05 * u(rng)) *
+        Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX()));
+    const Eigen::Quaterniond qb(1, 0.05 * u(rng), 0.05 * u(rng), 0.05 * u(rng));
+    Eigen::VectorXd q(14);
+    q << 1.3 + 0.05 * u(rng), 2.2 + 0.05 * u(rng), 0.4 + 0.05 * u(rng), 1.1 * qa.w(), 1.1 * qa.x(),
+        1.1 * qa.y(), 1.1 * qa.z(), 0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng), 0.95 * qb.w(),
+        0.95 * qb.x(), 0.95 * qb.y(), 0.95 * qb.z();
+    const auto term = MakeSurfaceContact(a, &square, b, &square, {0.2, 0.2, 0.8, 0.8});
+    const double beta = Value(mech, *term, q, nullptr);
+    const auto& e = term->extremum();
+    ASSERT_EQ(e.status, contact::ExtremalStatus::kAtBoundary);
+    ASSERT_TRUE(e.at_bound[0] && e.at_bound[1] && e.at_bound[2] && e.at_bound[3]);
+    EXPECT_NEAR(beta, (e.p_f - e.p_g).norm(), 1e-15);
+    CheckDerivatives(mech, *term, q, 1e-8, 2e-6);
+  }
+  // Edge against face: a cylinder (radius 0.2) tipped 0.3 rad about x, its lowest rim point
+  // 0.1 above g's middle.
+  const nurbs::NurbsSurface cylinder = nurbs::MakeCylinder(0.2, 1.0);
+  const Eigen::Quaterniond tip(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()));
+  Eigen::VectorXd q(14);
+  q << 0.5, 0.5, 0.1 + 0.2 * std::sin(0.3), tip.w(), tip.x(), tip.y(), tip.z(), 0, 0, 0, 1, 0, 0, 0;
+  std::vector<BodyPose> poses;
+  mech.Poses(q, &poses);
+  const auto term =
+      MakeSurfaceContact(a, &cylinder, b, &square,
+                         contact::ClosestSamplePair(cylinder, poses[0], square, poses[1], 16));
+  Eigen::Matrix<double, 1, 14> g;
+  const double beta = Value(mech, *term, q, &g);
+  ASSERT_EQ(term->extremum().status, contact::ExtremalStatus::kAtBoundary);
+  EXPECT_NEAR(beta, 0.1, 1e-14);
+  for (int k = 0; k < 14; ++k) {
+    Eigen::VectorXd qp = q, qm = q;
+    qp[k] += kH;
+    qm[k] -= kH;
+    EXPECT_NEAR((Value(mech, *term, qp, nullptr) - Value(mech, *term, qm, nullptr)) / (2 * kH),
+                g[k], 1e-8)
+        << "edge-face coordinate " << k;
   }
 }
 

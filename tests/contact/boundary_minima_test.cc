@@ -1,0 +1,354 @@
+// Minima on the domain boundary: edge–edge, corner–face and edge–face configurations of random
+// rational patches, a point beside a patch and a curve past one, each against a dense-sampling
+// truth that knows nothing of our solvers. Every seed the docs promise (the closest sample, any
+// seed within the stated basin, the minimum itself) must reach the sampled global minimum; the
+// rate from uniformly random seeds is printed, not asserted (a random seed may belong to another
+// local minimum).
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "contact/extremal.h"
+#include "nurbs/primitives.h"
+#include "tests/nurbs/random_nurbs.h"
+
+namespace tangent::contact {
+namespace {
+
+using nurbs::NurbsSurface;
+using nurbs::testing::RandomSurface;
+
+Vector7d Coordinates(const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
+  Vector7d c;
+  c << p, q.w(), q.x(), q.y(), q.z();
+  return c;
+}
+
+Eigen::Vector2d Lo(const NurbsSurface& s) {
+  return {s.knots_u().domain_begin(), s.knots_v().domain_begin()};
+}
+Eigen::Vector2d Hi(const NurbsSurface& s) {
+  return {s.knots_u().domain_end(), s.knots_v().domain_end()};
+}
+
+// Points of a placed surface on an (n+1)² grid over [lo, hi] (a window of the domain).
+struct Grid {
+  std::vector<Eigen::Vector2d> uv;
+  std::vector<Eigen::Vector3d> x;
+};
+Grid Sample(const NurbsSurface& s, const BodyPose& pose, const Eigen::Vector2d& lo,
+            const Eigen::Vector2d& hi, int n) {
+  Grid g;
+  for (int i = 0; i <= n; ++i) {
+    for (int j = 0; j <= n; ++j) {
+      const Eigen::Vector2d uv(lo[0] + (hi[0] - lo[0]) * i / n, lo[1] + (hi[1] - lo[1]) * j / n);
+      g.uv.push_back(uv);
+      g.x.push_back(pose.Point(s.Evaluate(uv[0], uv[1], 0).S));
+    }
+  }
+  return g;
+}
+
+// Dense sampling truth of the closest pair: a 64² grid per surface (edges and corners
+// included), then a 40² grid per surface on a window of ±2 coarse cells around the best pair.
+// Its distance is an upper bound of the true minimum within ~1e-4 of it.
+struct Truth {
+  Eigen::Vector4d u;
+  double distance;
+};
+Truth SampledClosestPair(const NurbsSurface& f, const BodyPose& pf, const NurbsSurface& g,
+                         const BodyPose& pg) {
+  auto best_of = [](const Grid& a, const Grid& b) {
+    Truth t{Eigen::Vector4d::Zero(), std::numeric_limits<double>::infinity()};
+    for (size_t i = 0; i < a.x.size(); ++i) {
+      for (size_t j = 0; j < b.x.size(); ++j) {
+        const double d = (a.x[i] - b.x[j]).squaredNorm();
+        if (d < t.distance)
+          t = {Eigen::Vector4d(a.uv[i][0], a.uv[i][1], b.uv[j][0], b.uv[j][1]), d};
+      }
+    }
+    t.distance = std::sqrt(t.distance);
+    return t;
+  };
+  constexpr int kCoarse = 64, kFine = 40;
+  const Truth coarse =
+      best_of(Sample(f, pf, Lo(f), Hi(f), kCoarse), Sample(g, pg, Lo(g), Hi(g), kCoarse));
+  auto window = [&](const NurbsSurface& s, const Eigen::Vector2d& at, Eigen::Vector2d* lo,
+                    Eigen::Vector2d* hi) {
+    const Eigen::Vector2d cell = (Hi(s) - Lo(s)) / kCoarse;
+    *lo = (at - 2.0 * cell).cwiseMax(Lo(s));
+    *hi = (at + 2.0 * cell).cwiseMin(Hi(s));
+  };
+  Eigen::Vector2d flo, fhi, glo, ghi;
+  window(f, coarse.u.head<2>(), &flo, &fhi);
+  window(g, coarse.u.tail<2>(), &glo, &ghi);
+  const Truth fine = best_of(Sample(f, pf, flo, fhi, kFine), Sample(g, pg, glo, ghi, kFine));
+  return fine.distance < coarse.distance ? fine : coarse;
+}
+
+// The sampled truth is within this of the true minimum: the fine window's spacing in space is
+// ~4/64·4/40 ≈ 6e-3, and the distance is quadratic in it along free directions (curvature ~1
+// per unit), linear only along a held one, whose samples lie on the bound exactly.
+constexpr double kSampleSlack = 2e-4;
+
+bool AnyHeld(const std::array<bool, 4>& a) { return a[0] || a[1] || a[2] || a[3]; }
+std::string Category(const std::array<bool, 4>& a) {
+  const int nf = a[0] + a[1], ng = a[2] + a[3];
+  auto part = [](int n) { return n == 0 ? "face" : n == 1 ? "edge" : "corner"; };
+  return std::string(part(nf)) + "-" + part(ng);
+}
+
+enum class Layout { kCornerFace, kEdgeFace, kEdgeEdge };
+
+// Two random rational bicubic sheets (about 4 x 4 x 1 units, curved) posed so that the closest
+// points lie on a boundary of one or both.
+struct Case {
+  NurbsSurface f, g;
+  BodyPose pf, pg;
+};
+Case MakeCase(std::mt19937_64& rng, Layout layout) {
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  NurbsSurface f = RandomSurface(rng, 3, 3, 5, 5, true);
+  NurbsSurface g = RandomSurface(rng, 3, 3, 5, 5, true);
+  const BodyPose pg =
+      BodyPose::FromCoordinates(Coordinates({0, 0, 0}, Eigen::Quaterniond::Identity()));
+  Eigen::Quaterniond q;
+  Eigen::Vector3d p;
+  switch (layout) {
+    case Layout::kCornerFace:  // f tipped on a corner above g's middle
+      q = Eigen::AngleAxisd(0.5 + 0.3 * uni(rng), Eigen::Vector3d::UnitX()) *
+          Eigen::AngleAxisd(-0.5 - 0.3 * uni(rng), Eigen::Vector3d::UnitY());
+      p = {1.5 + uni(rng), 1.5 + uni(rng), 1.2 + 0.5 * uni(rng)};
+      break;
+    case Layout::kEdgeFace:  // f tilted about one edge's direction only, above g
+      q = Eigen::AngleAxisd(0.6 + 0.4 * uni(rng), Eigen::Vector3d::UnitX());
+      p = {0.5 * uni(rng), 1.5 + uni(rng), 1.2 + 0.5 * uni(rng)};
+      break;
+    case Layout::kEdgeEdge:  // f beside g, turned and tilted so their near edges cross
+      q = Eigen::AngleAxisd(-0.4 - 0.5 * uni(rng), Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(0.3 + 0.6 * uni(rng), Eigen::Vector3d::UnitY());
+      p = {5.0 + uni(rng), -1.0 + 2.0 * uni(rng), 0.5 * uni(rng)};
+      break;
+  }
+  return {std::move(f), std::move(g), BodyPose::FromCoordinates(Coordinates(p, q)), pg};
+}
+
+// A solve reached the sampled global minimum: a minimum by its own test, no further than the
+// sampled distance (which bounds the true minimum from above), and β the distance between the
+// points, positive (apart), at a boundary extremum.
+::testing::AssertionResult ReachedMinimum(const SurfaceSurfaceExtremum& e, const Truth& t) {
+  const double dist = (e.p_f - e.p_g).norm();
+  if (e.status != ExtremalStatus::kConverged && e.status != ExtremalStatus::kAtBoundary)
+    return ::testing::AssertionFailure() << "status " << ToString(e.status);
+  if (e.kind != ExtremumKind::kMinimum)
+    return ::testing::AssertionFailure() << "kind " << ToString(e.kind);
+  if (dist > t.distance + 1e-12)
+    return ::testing::AssertionFailure()
+           << "distance " << dist << " above the sampled minimum " << t.distance;
+  if (dist < t.distance - kSampleSlack)
+    return ::testing::AssertionFailure()
+           << "sampled truth too coarse: " << dist << " vs " << t.distance;
+  // Random sheets are not oriented as facing solids: the side follows BoundarySide's rule.
+  const double side = BoundarySide(e.p_f - e.p_g, e.frame_f.col(2), e.frame_g.col(2));
+  if (AnyHeld(e.at_bound) && std::abs(e.beta - side * dist) > 1e-12 * std::max(1.0, dist))
+    return ::testing::AssertionFailure() << "beta " << e.beta << " is not the distance " << dist
+                                         << " signed by the side " << side;
+  return ::testing::AssertionSuccess();
+}
+
+// A seed within `radius` (a fraction of each domain width) of u, clamped into the domains.
+Eigen::Vector4d Near(std::mt19937_64& rng, const Eigen::Vector4d& u, const Eigen::Vector4d& lo,
+                     const Eigen::Vector4d& hi, double radius) {
+  std::uniform_real_distribution<double> d(-radius, radius);
+  Eigen::Vector4d s;
+  for (int i = 0; i < 4; ++i) s[i] = std::clamp(u[i] + d(rng) * (hi[i] - lo[i]), lo[i], hi[i]);
+  return s;
+}
+
+// The basin docs/stability.md states: seeds within 2 % of each domain width of the minimum.
+constexpr double kBasin = 0.02;
+
+TEST(BoundaryMinimaTest, RandomRationalPatchesFromManySeeds) {
+  std::mt19937_64 rng(20261201);
+  struct Tally {
+    int cases = 0, sample_ok = 0, basin = 0, basin_ok = 0, at_min_ok = 0, random = 0, random_ok = 0;
+  };
+  std::map<std::string, Tally> by_category;
+  const char* names[] = {"corner-face layout", "edge-face layout", "edge-edge layout"};
+  for (Layout layout : {Layout::kCornerFace, Layout::kEdgeFace, Layout::kEdgeEdge}) {
+    for (int k = 0; k < 8; ++k) {
+      const Case c = MakeCase(rng, layout);
+      const Truth truth = SampledClosestPair(c.f, c.pf, c.g, c.pg);
+      Eigen::Vector4d lo, hi;
+      lo << Lo(c.f), Lo(c.g);
+      hi << Hi(c.f), Hi(c.g);
+      const SurfaceSurfaceExtremum global =
+          SolveSurfaceSurface(c.f, c.pf, c.g, c.pg, ClosestSamplePair(c.f, c.pf, c.g, c.pg, 16));
+      ASSERT_TRUE(ReachedMinimum(global, truth))
+          << names[static_cast<int>(layout)] << " case " << k;
+      const std::string cat = Category(global.at_bound);
+      Tally& t = by_category[cat];
+      ++t.cases;
+      ++t.sample_ok;
+      // Seeded exactly at the minimum: it stays.
+      const SurfaceSurfaceExtremum again = SolveSurfaceSurface(c.f, c.pf, c.g, c.pg, global.u);
+      EXPECT_TRUE(ReachedMinimum(again, truth)) << cat << " case " << k << " (seed at the minimum)";
+      EXPECT_LT((again.u - global.u).cwiseQuotient(hi - lo).cwiseAbs().maxCoeff(), 1e-9);
+      t.at_min_ok += ReachedMinimum(again, truth);
+      for (int s = 0; s < 20; ++s) {
+        const SurfaceSurfaceExtremum e =
+            SolveSurfaceSurface(c.f, c.pf, c.g, c.pg, Near(rng, global.u, lo, hi, kBasin));
+        ++t.basin;
+        const bool ok = ReachedMinimum(e, truth) && std::abs(e.beta - global.beta) < 1e-11;
+        t.basin_ok += ok;
+        EXPECT_TRUE(ok) << cat << " case " << k << " basin seed " << s << ": beta " << e.beta
+                        << " vs " << global.beta << " " << ToString(e.status) << " "
+                        << ToString(e.kind) << "\n u " << e.u.transpose() << "\n min "
+                        << global.u.transpose() << "\n lo " << lo.transpose() << " hi "
+                        << hi.transpose() << " held " << e.at_bound[0] << e.at_bound[1]
+                        << e.at_bound[2] << e.at_bound[3] << " vs " << Category(global.at_bound);
+      }
+      for (int s = 0; s < 20; ++s) {
+        Eigen::Vector4d seed;
+        for (int i = 0; i < 4; ++i)
+          seed[i] = std::uniform_real_distribution<double>(lo[i], hi[i])(rng);
+        const SurfaceSurfaceExtremum e = SolveSurfaceSurface(c.f, c.pf, c.g, c.pg, seed);
+        ++t.random;
+        t.random_ok += ReachedMinimum(e, truth) && std::abs(e.beta - global.beta) < 1e-11;
+      }
+      if (AnyHeld(global.at_bound)) {
+        // β at an edge or corner extremum is the distance between the points (ReachedMinimum),
+        // measured along the direction it reports.
+        EXPECT_NEAR(global.direction.dot(global.p_f - global.p_g), global.beta, 1e-12);
+      }
+    }
+  }
+  std::printf("%-14s %5s %14s %14s %16s %14s\n", "minimum", "cases", "closest sample",
+              "at the minimum", "within 2 % basin", "random seeds");
+  for (const auto& [cat, t] : by_category) {
+    std::printf("%-14s %5d %9d/%-4d %9d/%-4d %11d/%-4d %9d/%-4d\n", cat.c_str(), t.cases,
+                t.sample_ok, t.cases, t.at_min_ok, t.cases, t.basin_ok, t.basin, t.random_ok,
+                t.random);
+  }
+  // The layouts must produce boundary minima of each kind the issue names.
+  EXPECT_GE(by_category.size(), 3u);
+}
+
+// Corner of one flat sheet against the edge of another, in closed form: f is the unit square
+// in z = 1 turned 45° about z (its corner at the origin's side), g the square [1, 2] x [0, 1]
+// in z = 0: the closest points are f's corner (0.5, 0.5 − √2/2·…) — computed below — and g's
+// edge x = 1, both held.
+TEST(BoundaryMinimaTest, CornerAgainstEdgeOfFlatSheetsIsTheEuclideanDistance) {
+  const NurbsSurface f = nurbs::MakePlanePatch({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  const NurbsSurface g = nurbs::MakePlanePatch({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  // f: the unit square turned 45° about z, its right corner at (0, 0.5, 1).
+  const Eigen::Quaterniond turn(Eigen::AngleAxisd(std::numbers::pi / 4, Eigen::Vector3d::UnitZ()));
+  const Eigen::Vector3d corner_right = turn * Eigen::Vector3d(1, 0, 0);  // f(1, 0) from f(0, 0)
+  const Eigen::Vector3d origin = Eigen::Vector3d(0, 0.5, 1) - corner_right;
+  const BodyPose pf = BodyPose::FromCoordinates(Coordinates(origin, turn));
+  const BodyPose pg =
+      BodyPose::FromCoordinates(Coordinates({1, 0, 0}, Eigen::Quaterniond::Identity()));
+  // f's corner (0, 0.5, 1) against g's edge x = 1 (from (1, 0, 0) to (1, 1, 0)): (1, 0.5, 0).
+  const double expected = std::sqrt(2.0);
+  for (const Eigen::Vector4d& seed :
+       {ClosestSamplePair(f, pf, g, pg, 16), Eigen::Vector4d(0.5, 0.5, 0.5, 0.5),
+        Eigen::Vector4d(0.9, 0.1, 0.2, 0.3), Eigen::Vector4d(0.98, 0.02, 0.0, 0.5)}) {
+    const SurfaceSurfaceExtremum e = SolveSurfaceSurface(f, pf, g, pg, seed);
+    EXPECT_EQ(e.status, ExtremalStatus::kAtBoundary) << ToString(e.status);
+    EXPECT_EQ(e.kind, ExtremumKind::kMinimum);
+    EXPECT_NEAR(e.beta, expected, 1e-14) << "seed " << seed.transpose();
+    EXPECT_LT((e.p_f - Eigen::Vector3d(0, 0.5, 1)).norm(), 1e-13);
+    EXPECT_LT((e.p_g - Eigen::Vector3d(1, 0.5, 0)).norm(), 1e-13);
+    EXPECT_TRUE(e.at_bound[0] && e.at_bound[1] && e.at_bound[2] && !e.at_bound[3]);
+  }
+}
+
+// A point beside a patch (nearest point on an edge or a corner) and a curve passing it.
+TEST(BoundaryMinimaTest, PointBesideAndCurvePastARandomPatch) {
+  std::mt19937_64 rng(7);
+  const BodyPose id =
+      BodyPose::FromCoordinates(Coordinates({0, 0, 0}, Eigen::Quaterniond::Identity()));
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  int edge = 0, corner = 0;
+  for (int k = 0; k < 30; ++k) {
+    const NurbsSurface s = RandomSurface(rng, 3, 2, 5, 4, true);
+    // Outside the footprint [0, 4] x [0, 3] in x and/or y.
+    const Eigen::Vector3d x(k % 3 == 0 ? 1.0 + 2 * uni(rng) : 4.5 + uni(rng),
+                            k % 3 == 1 ? 1.0 + uni(rng) : -0.5 - uni(rng), uni(rng) - 0.5);
+    // Truth: a 400² sampling of the domain (edges included).
+    const Eigen::Vector2d lo = Lo(s), hi = Hi(s);
+    double best = std::numeric_limits<double>::infinity();
+    Eigen::Vector2d best_u;
+    constexpr int n = 400;
+    for (int i = 0; i <= n; ++i) {
+      for (int j = 0; j <= n; ++j) {
+        const Eigen::Vector2d uv = lo + (hi - lo).cwiseProduct(Eigen::Vector2d(i, j) / n);
+        const double d = (s.Evaluate(uv[0], uv[1], 0).S - x).norm();
+        if (d < best) best = d, best_u = uv;
+      }
+    }
+    for (const Eigen::Vector2d& seed :
+         {Eigen::Vector2d(0.5 * (lo + hi)), best_u,
+          Eigen::Vector2d((best_u + 0.05 * (hi - lo)).cwiseMin(hi))}) {
+      const PointSurfaceExtremum e = SolvePointSurface(x, s, id, seed);
+      const double dist = (e.p_f - x).norm();
+      ASSERT_TRUE(e.status == ExtremalStatus::kAtBoundary || e.status == ExtremalStatus::kConverged)
+          << ToString(e.status);
+      EXPECT_EQ(e.kind, ExtremumKind::kMinimum);
+      EXPECT_LE(dist, best + 1e-12) << "case " << k;
+      EXPECT_GT(dist, best - 1e-4);
+      EXPECT_NEAR(std::abs(e.distance), dist, 1e-12);
+      if (seed == best_u) {
+        edge += e.at_bound[0] != e.at_bound[1];
+        corner += e.at_bound[0] && e.at_bound[1];
+      }
+    }
+  }
+  std::printf("point beside a patch: %d edge and %d corner minima of 30, all from 3 seeds\n", edge,
+              corner);
+  EXPECT_GT(edge, 0);
+  EXPECT_GT(corner, 0);
+
+  // A curve ending beside a patch: its end point against the patch's edge.
+  int curve_cases = 0;
+  for (int k = 0; k < 10; ++k) {
+    const NurbsSurface s = RandomSurface(rng, 3, 3, 5, 5, true);
+    std::vector<Eigen::Vector3d> pts = {
+        {5.0 + uni(rng), 1.0, 1.0}, {6.0, 2.0, 0.5 + uni(rng)}, {7.0, 1.5 + uni(rng), 2.0}};
+    const nurbs::NurbsCurve3d c(nurbs::KnotVector(2, {0, 0, 0, 1, 1, 1}), pts);
+    const BodyCurve bc(&c);
+    double best = std::numeric_limits<double>::infinity();
+    for (int i = 0; i <= 200; ++i) {
+      const Eigen::Vector3d y = c.Evaluate(i / 200.0, 0).C;
+      for (int a = 0; a <= 200; ++a) {
+        for (int b = 0; b <= 200; ++b) {
+          const Eigen::Vector2d uv =
+              Lo(s) + (Hi(s) - Lo(s)).cwiseProduct(Eigen::Vector2d(a, b) / 200);
+          best = std::min(best, (s.Evaluate(uv[0], uv[1], 0).S - y).norm());
+        }
+      }
+    }
+    const Eigen::Vector3d seed(0.5 * (Lo(s)[0] + Hi(s)[0]), 0.5 * (Lo(s)[1] + Hi(s)[1]), 0.5);
+    const CurveSurfaceExtremum e = SolveCurveSurface(s, id, bc, id, seed);
+    const double dist = (e.p_f - e.p_g).norm();
+    EXPECT_EQ(e.kind, ExtremumKind::kMinimum) << "curve case " << k;
+    EXPECT_LE(dist, best + 1e-12) << "curve case " << k;
+    EXPECT_GT(dist, best - 2e-3);
+    EXPECT_NEAR(std::abs(e.beta), dist, 1e-12);
+    curve_cases += e.at_bound[2];
+  }
+  std::printf("curve past a patch: %d of 10 minima at the curve's end\n", curve_cases);
+  EXPECT_GT(curve_cases, 0);
+}
+
+}  // namespace
+}  // namespace tangent::contact
