@@ -63,6 +63,12 @@ Eigen::FullPivLU<Eigen::Matrix<double, N, N>> Factor(const Eigen::Matrix<double,
   return Eigen::FullPivLU<Eigen::Matrix<double, N, N>>(a);
 }
 
+/// A Newton step below this fraction of the domain that no longer lowers the residual ends the
+/// iteration as converged: stagnation at rounding level, where the step is the matrix's
+/// amplification of eps (1e-13 near a sphere's pole, rcond 3e-5). Since J·step = −r, the
+/// residual is then below 1e-10 of |J|·width as well.
+inline constexpr double kStagnationStep = 1e-10;
+
 template <int N>
 struct BoxNewtonResult {
   Eigen::Matrix<double, N, 1> x;
@@ -193,14 +199,25 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
     Vec trial = res.x;
     NewtonSystem<N> tsys;
     double a_try = alpha;
+    double r_trial = r0;
     for (int k = 0; k < 30; ++k) {
       trial = ClampOrWrap<N>(res.x + a_try * step, lo, hi, periodic);
       eval(trial, &tsys);
       Vec rt;
       Mat at;
       ActiveSystem<N>(tsys, res.active, any, &rt, &at);
-      if (rt.norm() <= (1.0 - 1e-4 * a_try) * r0 || rt.norm() == 0.0 || a_try < 1e-9) break;
+      r_trial = rt.norm();
+      if (r_trial <= (1.0 - 1e-4 * a_try) * r0 || r_trial == 0.0 || a_try < 1e-9) break;
       a_try *= 0.5;
+    }
+    // Stagnation at rounding level: no fraction of a tiny step lowers the residual. Near a
+    // pole or another ill-conditioned point the step's own rounding noise (~eps/rcond of the
+    // domain) can sit just above step_tolerance for ever; the iterate is as good as it gets.
+    if (!(r_trial < r0) && step.cwiseQuotient(width).cwiseAbs().maxCoeff() < kStagnationStep) {
+      eval(res.x, &sys);  // leave the evaluation at the iterate
+      res.converged = true;
+      ++res.iterations;
+      break;
     }
     res.x = trial;
     sys = tsys;  // The accepted trial's evaluation is the next iterate's.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -202,19 +203,116 @@ bool Acceptable(const internal::BoxNewtonResult<N>& r, const internal::NewtonSys
   return IsBoxMinimum<N>(r, s, lo, hi) || IsPenetration<N>(r, s);
 }
 
+// ---- Poles ----------------------------------------------------------------------------------
+//
+// At a pole row (a domain edge the parameterization collapses to a point, S_u = 0 along it) the
+// surface is smooth but Newton's matrix is singular: the angle parameter moves nothing there,
+// and a minimization reaching the pole can stop on it with the angle wherever the seed left it.
+// The pole is handled as the point it is: which way the surface leaves it is chosen by the
+// angle (the departure t(a) = ±∂S/∂across at the pole row), so from a pole either some departure
+// decreases the distance (the minimum is near the pole: restart just off it, along the best
+// departure) or none does (the pole is the extremum: d lies along the limit normal).
+
+enum class PoleAction { kNone, kEscape, kExtremum };
+
+// A pole row at or within 1e-3 of the domain from uv: the parameter across it (1: the row
+// v = bound, where S_u vanishes; 0: u = bound, where S_v vanishes), the bound, the inward sign.
+struct PoleRow {
+  bool found = false;
+  int across = 1;
+  double bound = 0.0;
+  double inward = 1.0;
+};
+PoleRow FindPoleRow(const nurbs::NurbsSurface& s, const Eigen::Vector2d& uv) {
+  for (int across : {1, 0}) {
+    const nurbs::KnotVector& k = across == 1 ? s.knots_v() : s.knots_u();
+    const double lo = k.domain_begin(), hi = k.domain_end(), w = hi - lo;
+    PoleRow row;
+    row.found = true;
+    row.across = across;
+    if (uv[across] - lo <= 1e-3 * w) {
+      row.bound = lo;
+      row.inward = 1.0;
+    } else if (hi - uv[across] <= 1e-3 * w) {
+      row.bound = hi;
+      row.inward = -1.0;
+    } else {
+      continue;
+    }
+    Eigen::Vector2d at = uv;
+    at[across] = row.bound;
+    const nurbs::SurfacePoint p = s.Evaluate(at[0], at[1], 1);
+    const Eigen::Vector3d& along = across == 1 ? p.S_u : p.S_v;
+    const Eigen::Vector3d& off = across == 1 ? p.S_v : p.S_u;
+    if (off.norm() > 0.0 && along.norm() <= nurbs::kDegenerateRatio * off.norm()) return row;
+  }
+  return {};
+}
+
+// Number of departure angles sampled around a pole (the best is then refined by the solve).
+constexpr int kPoleAngles = 64;
+
+// The departure from the pole row of a placed surface that most decreases ½|d|², where moving
+// the surface's point by δp changes d by sign·δp: its slope per unit length (< 0: a descent),
+// and the angle parameter it leaves at.
+double BestDeparture(const nurbs::NurbsSurface& s, const BodyPose& pose, const PoleRow& row,
+                     const Eigen::Vector3d& d, double sign, double* angle) {
+  const nurbs::KnotVector& k = row.across == 1 ? s.knots_u() : s.knots_v();
+  double best = std::numeric_limits<double>::infinity();
+  for (int i = 0; i <= kPoleAngles; ++i) {
+    const double a = k.domain_begin() +
+                     (k.domain_end() - k.domain_begin()) * i / static_cast<double>(kPoleAngles);
+    const nurbs::SurfacePoint p =
+        row.across == 1 ? s.Evaluate(a, row.bound, 1) : s.Evaluate(row.bound, a, 1);
+    const Eigen::Vector3d t = pose.R * (row.across == 1 ? p.S_v : p.S_u) * row.inward;
+    const double slope = sign * d.dot(t) / t.norm();
+    if (slope < best) {
+      best = slope;
+      *angle = a;
+    }
+  }
+  return best;
+}
+
+// Whether the pole point is a minimum of the distance over its neighbourhood on the surface:
+// ½|d|² with the other point fixed does not decrease at small departures in every direction
+// (the first order vanishes there, so this is the second-order test).
+bool PoleIsMinimum(const nurbs::NurbsSurface& s, const BodyPose& pose, const PoleRow& row,
+                   const Eigen::Vector3d& other) {
+  const nurbs::KnotVector& ka = row.across == 1 ? s.knots_u() : s.knots_v();
+  const nurbs::KnotVector& kx = row.across == 1 ? s.knots_v() : s.knots_u();
+  const Eigen::Vector3d pole =
+      pose.Point(row.across == 1 ? s.Evaluate(ka.domain_begin(), row.bound, 0).S
+                                 : s.Evaluate(row.bound, ka.domain_begin(), 0).S);
+  const double at_pole = (pole - other).squaredNorm();
+  const double off = row.bound + row.inward * 1e-4 * (kx.domain_end() - kx.domain_begin());
+  for (int i = 0; i < 16; ++i) {
+    const double a = ka.domain_begin() + (ka.domain_end() - ka.domain_begin()) * i / 16.0;
+    const Eigen::Vector3d p =
+        pose.Point(row.across == 1 ? s.Evaluate(a, off, 0).S : s.Evaluate(off, a, 0).S);
+    if ((p - other).squaredNorm() < at_pole * (1.0 - 1e-12)) return false;
+  }
+  return true;
+}
+
 // Newton from the seed; under Seek::kMinimum, when that does not end at an acceptable extremum,
-// the bound-constrained minimization from the same seed and a Newton polish on its active face
-// (release by the multipliers' sign). `eval` must leave the problem's own evaluation state at
-// the last point it was called with: on return that is the returned r.x.
-template <int N, class Eval>
-internal::BoxNewtonResult<N> SolveOnBox(Eval&& eval, const Eigen::Matrix<double, N, 1>& seed,
+// the bound-constrained minimization from the same seed (restarted off a pole it stops on) and a
+// Newton polish on its active face (release by the multipliers' sign). `eval` must leave the
+// problem's own evaluation state at the last point it was called with: on return that is the
+// returned r.x. `pole(x, &y)` looks for a pole at or next to x: kEscape with y a seed just off
+// it along the best departure, kExtremum with y the pole pair (the other parameters solved for
+// the pole point) when the pole itself is the minimum, kNone otherwise.
+template <int N, class Eval, class Pole>
+internal::BoxNewtonResult<N> SolveOnBox(Eval&& eval, Pole&& pole,
+                                        const Eigen::Matrix<double, N, 1>& seed,
                                         const Eigen::Matrix<double, N, 1>& lo,
                                         const Eigen::Matrix<double, N, 1>& hi,
                                         const internal::BoxNewtonOptions<N>& opt, Seek seek,
                                         internal::NewtonSystem<N>* at_x) {
+  using Vec = Eigen::Matrix<double, N, 1>;
   internal::NewtonSystem<N> last;
   double seed_value = -1.0;  // ½|d|² at the (clamped) seed: BoxNewton's first evaluation
-  auto recorded = [&](const Eigen::Matrix<double, N, 1>& x, internal::NewtonSystem<N>* s) {
+  auto recorded = [&](const Vec& x, internal::NewtonSystem<N>* s) {
     eval(x, s);
     last = *s;
     if (seed_value < 0.0) seed_value = s->value;
@@ -228,16 +326,40 @@ internal::BoxNewtonResult<N> SolveOnBox(Eval&& eval, const Eigen::Matrix<double,
     *at_x = last;
     return first;
   }
-  const internal::BoxNewtonResult<N> m = internal::BoxMinimize<N>(recorded, seed, lo, hi, opt);
+  int iterations = first.iterations;
+  // The pole pair as the answer: converged, nothing held (a pole is not an edge).
+  auto at_pole = [&](const Vec& y) {
+    internal::BoxNewtonResult<N> r;
+    r.x = y;
+    r.converged = true;
+    r.iterations = iterations;
+    r.rcond = 0.0;
+    eval(y, at_x);
+    return r;
+  };
+  internal::BoxNewtonResult<N> m = internal::BoxMinimize<N>(recorded, seed, lo, hi, opt);
+  iterations += m.iterations;
+  Vec y;
+  for (int escapes = 0; escapes < 3; ++escapes) {
+    const PoleAction action = pole(m.x, &y);
+    if (action == PoleAction::kExtremum) return at_pole(y);
+    if (action == PoleAction::kNone) break;
+    m = internal::BoxMinimize<N>(recorded, y, lo, hi, opt);
+    iterations += m.iterations;
+  }
   internal::BoxNewtonOptions<N> polish = opt;
   polish.initial_active = m.active;
   polish.release_by_gradient = true;
   internal::BoxNewtonResult<N> second = internal::BoxNewton<N>(recorded, m.x, lo, hi, polish);
-  const int iterations = first.iterations + m.iterations + second.iterations;
+  iterations += second.iterations;
   if (Acceptable<N>(second, last, lo, hi)) {
     second.iterations = iterations;
     *at_x = last;
     return second;
+  }
+  // Newton near a pole slows to linear and stops singular: the pole itself may be the answer.
+  for (const Vec* x : {&second.x, &m.x}) {
+    if (pole(*x, &y) == PoleAction::kExtremum) return at_pole(y);
   }
   // Neither is a minimum: keep Newton's answer and its honest flags.
   internal::NewtonSystem<N> again;
@@ -315,8 +437,39 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   hi << Hi(f), Hi(g);
   auto opt = Convert<4>(options);
   opt.periodic = {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()};
+  auto pole = [&](const Eigen::Vector4d& x, Eigen::Vector4d* y) {
+    for (int side = 0; side < 2; ++side) {
+      const nurbs::NurbsSurface& s = side == 0 ? f : g;
+      const nurbs::NurbsSurface& o = side == 0 ? g : f;
+      const BodyPose& ps = side == 0 ? pose_f : pose_g;
+      const BodyPose& po = side == 0 ? pose_g : pose_f;
+      const Eigen::Vector2d uv = x.segment<2>(2 * side);
+      const PoleRow row = FindPoleRow(s, uv);
+      if (!row.found) continue;
+      Eigen::Vector2d at = uv;
+      at[row.across] = row.bound;
+      const Eigen::Vector3d P = ps.Point(s.Evaluate(at[0], at[1], 0).S);
+      const PointSurfaceExtremum q =
+          SolvePointSurface(P, o, po, x.segment<2>(2 * (1 - side)), options);
+      if (q.status == ExtremalStatus::kInvalidInput) return PoleAction::kNone;
+      const Eigen::Vector3d d = side == 0 ? Eigen::Vector3d(P - q.p_f) : Eigen::Vector3d(q.p_f - P);
+      *y = x;
+      y->segment<2>(2 * side) = at;
+      y->segment<2>(2 * (1 - side)) = q.u;
+      double angle = 0.0;
+      if (BestDeparture(s, ps, row, d, side == 0 ? 1.0 : -1.0, &angle) < -1e-9 * d.norm()) {
+        const int i = 2 * side + row.across;
+        (*y)[2 * side + 1 - row.across] = angle;
+        (*y)[i] = row.bound + row.inward * 1e-3 * (hi[i] - lo[i]);
+        return PoleAction::kEscape;
+      }
+      const bool minimum = q.kind == ExtremumKind::kMinimum && PoleIsMinimum(s, ps, row, q.p_f);
+      return minimum ? PoleAction::kExtremum : PoleAction::kNone;
+    }
+    return PoleAction::kNone;
+  };
   internal::NewtonSystem<4> sys;
-  const auto r = SolveOnBox<4>(eval, seed, lo, hi, opt, options.seek, &sys);
+  const auto r = SolveOnBox<4>(eval, pole, seed, lo, hi, opt, options.seek, &sys);
   // e is the pair at r.x (SolveOnBox's contract).
   SurfaceSurfaceExtremum out;
   out.u = r.x;
@@ -328,14 +481,14 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   out.at_bound = r.active;
   const double dist = e.d.norm();
   if (std::any_of(r.active.begin(), r.active.end(), [](bool b) { return b; }) && dist > 0.0) {
-    const double side = BoundarySide(e.d, e.f.N, e.g.N);
+    const double side = BoundarySide(e.d, out.frame_f.col(2), out.frame_g.col(2));
     out.direction = side * (e.d / dist);
     out.beta = side * dist;
   } else {
     out.direction = out.n_g;
     out.beta = e.d.dot(out.n_g);
   }
-  out.alignment = e.f.N.normalized().dot(out.n_g);
+  out.alignment = out.frame_f.col(2).dot(out.n_g);
   out.status = StatusOf(r);
   out.kind = KindAt<4>(r, sys, lo, hi);
   out.iterations = r.iterations;
@@ -371,8 +524,23 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
   };
   auto opt = Convert<2>(options);
   opt.periodic = {f.periodic_u(), f.periodic_v()};
+  auto pole = [&](const Eigen::Vector2d& x, Eigen::Vector2d* y) {
+    const PoleRow row = FindPoleRow(f, x);
+    if (!row.found) return PoleAction::kNone;
+    *y = x;
+    (*y)[row.across] = row.bound;
+    const Eigen::Vector3d d = pose_f.Point(f.Evaluate((*y)[0], (*y)[1], 0).S) - x_W;
+    double angle = 0.0;
+    if (BestDeparture(f, pose_f, row, d, 1.0, &angle) < -1e-9 * d.norm()) {
+      const int i = row.across;
+      (*y)[1 - i] = angle;
+      (*y)[i] = row.bound + row.inward * 1e-3 * (Hi(f)[i] - Lo(f)[i]);
+      return PoleAction::kEscape;
+    }
+    return PoleIsMinimum(f, pose_f, row, x_W) ? PoleAction::kExtremum : PoleAction::kNone;
+  };
   internal::NewtonSystem<2> s;
-  const auto r = SolveOnBox<2>(eval, seed, Lo(f), Hi(f), opt, options.seek, &s);
+  const auto r = SolveOnBox<2>(eval, pole, seed, Lo(f), Hi(f), opt, options.seek, &s);
   PointSurfaceExtremum out;
   out.u = r.x;
   out.p_f = p.world.S;
@@ -449,7 +617,9 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
   auto opt = Convert<3>(options);
   opt.periodic = {f.periodic_u(), f.periodic_v(), false};
   internal::NewtonSystem<3> sys;
-  const auto r = SolveOnBox<3>(eval, seed, lo, hi, opt, options.seek, &sys);
+  // Poles of f against a curve are not handled yet (the pair and point solvers handle them).
+  auto no_pole = [](const Eigen::Vector3d&, Eigen::Vector3d*) { return PoleAction::kNone; };
+  const auto r = SolveOnBox<3>(eval, no_pole, seed, lo, hi, opt, options.seek, &sys);
   CurveSurfaceExtremum out;
   out.u = r.x;
   out.p_f = e.f.world.S;

@@ -35,6 +35,8 @@ void EvaluatePlaced(const nurbs::NurbsSurface& surface, const BodyPose& pose, do
   w.S_uv = pose.R * b.S_uv;
   w.S_vv = pose.R * b.S_vv;
   out->N = w.S_u.cross(w.S_v);
+  out->pole = nurbs::IsDegenerate(b);
+  if (out->pole) out->limit_n = pose.R * nurbs::UnitNormal(surface, u, v, b);
   out->N_u = w.S_uu.cross(w.S_v) + w.S_u.cross(w.S_uv);
   out->N_v = w.S_uv.cross(w.S_v) + w.S_u.cross(w.S_vv);
 }
@@ -75,8 +77,17 @@ void EvaluatePlaced(const BodyCurve& curve, const BodyPose& pose, double tau, in
 
 Eigen::Matrix3d ContactFrame(const PlacedSurfacePoint& p) {
   Eigen::Matrix3d r;
-  r.col(0) = p.world.S_u.normalized();
-  r.col(2) = p.N.normalized();
+  const Eigen::Vector3d n = p.unit_normal();
+  r.col(2) = n;
+  if (!p.pole) {
+    r.col(0) = p.world.S_u.normalized();
+  } else {
+    const Eigen::Vector3d& t =
+        p.world.S_u.squaredNorm() >= p.world.S_v.squaredNorm() ? p.world.S_u : p.world.S_v;
+    Eigen::Vector3d x = t - t.dot(n) * n;
+    if (!(x.norm() > 0.0)) x = n.unitOrthogonal();  // both partials vanished
+    r.col(0) = x.normalized();
+  }
   r.col(1) = r.col(2).cross(r.col(0));
   return r;
 }

@@ -23,7 +23,12 @@ struct BodyPose {
 struct PlacedSurfacePoint {
   nurbs::SurfacePoint body;   ///< in the body frame B
   nurbs::SurfacePoint world;  ///< in the world frame W (points moved, partials rotated)
-  Eigen::Vector3d N;          ///< S_u × S_v in W (unnormalized normal)
+  Eigen::Vector3d N;          ///< S_u × S_v in W (unnormalized normal; 0 at a pole)
+  bool pole = false;          ///< a degenerate point of the parameterization (nurbs::IsDegenerate)
+  Eigen::Vector3d limit_n;    ///< at a pole: the limit unit normal in W (nurbs::UnitNormal)
+  /// Unit outward normal in W: N/|N|, or at a pole the limit normal (computed on demand: most
+  /// evaluations inside a solve never need it).
+  Eigen::Vector3d unit_normal() const { return pole ? limit_n : Eigen::Vector3d(N.normalized()); }
   Eigen::Vector3d N_u, N_v;  ///< its partials, S_uu × S_v + S_u × S_uv and S_uv × S_v + S_u × S_vv
 };
 
@@ -59,8 +64,9 @@ void EvaluatePlaced(const BodyCurve& curve, const BodyPose& pose, double tau, in
                     nurbs::SpanHint* surface_hint, PlacedCurvePoint* out);
 
 /// The contact frame of a surface point (seed 001 Appendix A), columns x, y, z in W:
-/// x = S_u/|S_u|, z = N/|N| (outward normal), y = z × x. @pre S_u ≠ 0 and N ≠ 0 (not at a pole);
-/// at one, the columns are NaN.
+/// x = S_u/|S_u|, z = n (outward normal), y = z × x. At a pole (p.pole) z is the limit normal
+/// from inside the domain (nurbs::UnitNormal) and x the surviving partial's direction, made
+/// orthogonal to z: a right-handed orthonormal frame everywhere, never NaN.
 Eigen::Matrix3d ContactFrame(const PlacedSurfacePoint& p);
 
 /// ∂x_W/∂q_B (3 x 7) of a body-fixed point with body coordinates p_B: [I, ∂(R p_B)/∂Q].

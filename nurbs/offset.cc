@@ -14,26 +14,12 @@ OffsetMesh MakeOffsetMesh(const NurbsSurface& surface, double tolerance, double 
   out.tessellation_bound = out.base.error_bound;
   out.offset = out.tessellation_bound + margin;
   const size_t n = out.base.vertices.size();
-  double scale = 0.0;
-  for (const Eigen::Vector3d& v : out.base.vertices) scale = std::max(scale, v.norm());
   out.vertices.resize(n);
   for (size_t k = 0; k < n; ++k) {
-    const SurfacePoint p = surface.Evaluate(out.base.uv[k][0], out.base.uv[k][1], 1);
-    Eigen::Vector3d N = p.S_u.cross(p.S_v);
-    // A degenerate point (a sphere's pole: S_u = 0): the normal is the limit of the normals next
-    // to it; take it 1e-6 of the domain inward in both directions.
-    for (double step = 1e-6; !(N.norm() > 1e-12 * (1.0 + scale * scale)) && step < 1e-2;
-         step *= 10) {
-      const double u0 = surface.knots_u().domain_begin(), u1 = surface.knots_u().domain_end();
-      const double v0 = surface.knots_v().domain_begin(), v1 = surface.knots_v().domain_end();
-      const double u =
-          out.base.uv[k][0] + step * (u1 - u0) * (out.base.uv[k][0] < 0.5 * (u0 + u1) ? 1 : -1);
-      const double v =
-          out.base.uv[k][1] + step * (v1 - v0) * (out.base.uv[k][1] < 0.5 * (v0 + v1) ? 1 : -1);
-      const SurfacePoint q = surface.Evaluate(u, v, 1);
-      N = q.S_u.cross(q.S_v);
-    }
-    out.vertices[k] = out.base.vertices[k] + out.offset * N.normalized();
+    // At a degenerate point (a sphere's pole) the limit of the normals from inside the domain.
+    const double u = out.base.uv[k][0], v = out.base.uv[k][1];
+    const Eigen::Vector3d normal = UnitNormal(surface, u, v, surface.Evaluate(u, v, 2));
+    out.vertices[k] = out.base.vertices[k] + out.offset * normal;
   }
   return out;
 }

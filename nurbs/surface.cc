@@ -5,6 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <Eigen/Geometry>
+
 #include "nurbs/basis.h"
 #include "nurbs/refinement.h"
 
@@ -174,6 +176,35 @@ SurfacePoint EvaluateReference(const NurbsSurface& surface, double u, double v, 
   SurfacePoint out;
   RationalQuotient(h, order, &out);
   return out;
+}
+
+bool IsDegenerate(const SurfacePoint& p) {
+  constexpr double r2 = kDegenerateRatio * kDegenerateRatio;
+  const double a2 = p.S_u.squaredNorm(), b2 = p.S_v.squaredNorm();
+  return !(a2 > r2 * b2) || !(b2 > r2 * a2);
+}
+
+Eigen::Vector3d UnitNormal(const NurbsSurface& surface, double u, double v, const SurfacePoint& p) {
+  if (!IsDegenerate(p)) return p.S_u.cross(p.S_v).normalized();
+  const KnotVector& ku = surface.knots_u();
+  const KnotVector& kv = surface.knots_v();
+  // The inward sign along each direction: + in the lower half of the domain, − in the upper.
+  const double su = u < 0.5 * (ku.domain_begin() + ku.domain_end()) ? 1.0 : -1.0;
+  const double sv = v < 0.5 * (kv.domain_begin() + kv.domain_end()) ? 1.0 : -1.0;
+  const double a = p.S_u.norm(), b = p.S_v.norm();
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  if (b > kDegenerateRatio * a) {
+    n = sv * p.S_uv.cross(p.S_v);  // S_u vanished
+  } else if (a > kDegenerateRatio * b) {
+    n = su * p.S_u.cross(p.S_uv);  // S_v vanished
+  }
+  const double scale = std::max(p.S_uv.squaredNorm(), std::max(a * a, b * b));
+  if (n.norm() > 1e-10 * scale) return n.normalized();
+  SpanHint hint;
+  SurfacePoint q;
+  surface.Evaluate<1>(u + su * 1e-7 * (ku.domain_end() - ku.domain_begin()),
+                      v + sv * 1e-7 * (kv.domain_end() - kv.domain_begin()), &hint, &q);
+  return q.S_u.cross(q.S_v).normalized();
 }
 
 }  // namespace tangent::nurbs

@@ -83,4 +83,22 @@ class NurbsSurface {
 SurfacePoint EvaluateReference(const NurbsSurface& surface, double u, double v,
                                int order = kMaxOrder);
 
+/// Relative size below which a first partial counts as vanished: |S_u| ≤ kDegenerateRatio |S_v|
+/// (or the reverse) is a degenerate point such as a sphere's pole. There N = S_u × S_v has lost
+/// all but ~eps/1e-8 of its direction, while the limit normal below is exact to O(1e-8).
+inline constexpr double kDegenerateRatio = 1e-8;
+
+/// Whether p (first partials) is a degenerate point of the parameterization (a pole, a
+/// collapsed edge): one partial vanishes against the other, or both vanish.
+bool IsDegenerate(const SurfacePoint& p);
+
+/// The unit normal N/|N| at (u, v), p = the surface there to second order. At a degenerate point
+/// the limit of the normals from inside the domain: where S_u vanishes along a row v = v₀,
+/// N(u, v₀ + δ) = δ (S_uv × S_v) + O(δ²), so the normal is ±S_uv × S_v with the sign of the
+/// inward δ (+ at the lower v bound, − at the upper); likewise ±S_u × S_uv where S_v vanishes.
+/// On a sphere or any surface of revolution this is the axis direction at the pole, the same for
+/// every u. If that too vanishes (a higher-order or corner collapse) the normal is taken 1e-7 of
+/// the domain inward in both directions. Allocation free.
+Eigen::Vector3d UnitNormal(const NurbsSurface& surface, double u, double v, const SurfacePoint& p);
+
 }  // namespace tangent::nurbs
