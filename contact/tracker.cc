@@ -64,8 +64,7 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
   double det = 0.0;
   bool invertible = false;
   eval_.F_u.computeInverseAndDetWithCheck(inverse, det, invertible, 0.0);
-  const double inv_N_g = 1.0 / eval_.g.N.norm();
-  const Eigen::Vector3d n_g = eval_.g.N * inv_N_g;
+  const Eigen::Vector3d n_g = eval_.g.unit_normal();  // the limit normal at a pole
   beta_ = eval_.d.dot(n_g);
   // Scaled residual: d·x_g, d·y_g over the pair's length scale L·max(|β|, 1e-3 L) with
   // L = max(|g_s|, |g_t|), and N_f·x_g, N_f·y_g over |N_f| L (angles in radians).
