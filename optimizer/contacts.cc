@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include <Eigen/LU>
+
 #include "contact/contact_jacobian.h"
 #include "contact/rigid.h"
 
@@ -85,6 +87,56 @@ void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref
   J_b = -n.transpose() * contact::PointJacobian(pg, eval_.g.body.S);
 }
 
+void SurfaceContactTerm::AddBoundaryHessian(const BodyPose& pf, const BodyPose& pg, double w,
+                                            TermHessian* h) const {
+  // An edge or corner extremum: β = |d| signed, n = d/β. The free parameters stay stationary
+  // for ½|d|² (the held ones stay on their bounds), so with grad = [d·f_u, d·f_v, −d·g_s,
+  // −d·g_t] their motion is u_q = −hess_FF⁻¹ ∂grad_F/∂q, and with D = ∂d/∂q = P + J_u u_q:
+  //   ∇²β = Pᵀ n_q + V_fᵀ u_q^f − V_gᵀ u_q^g + n·∂²(f − g)/∂q²|_u,   n_q = (I − nnᵀ) D / β.
+  const nurbs::SurfacePoint& a = eval_.f.world;
+  const nurbs::SurfacePoint& b = eval_.g.world;
+  const Eigen::Vector3d& d = eval_.d;
+  const Eigen::Vector3d& n = ext_.direction;
+  Eigen::Matrix<double, 3, 14> P;
+  P << contact::PointJacobian(pf, eval_.f.body.S), -contact::PointJacobian(pg, eval_.g.body.S);
+  Eigen::Matrix<double, 4, 14> G;  // ∂grad/∂q at fixed parameters
+  G.row(0) = a.S_u.transpose() * P;
+  G.row(1) = a.S_v.transpose() * P;
+  G.row(2) = -b.S_u.transpose() * P;
+  G.row(3) = -b.S_v.transpose() * P;
+  G.block<1, 7>(0, 0) += d.transpose() * contact::DirectionJacobian(pf, eval_.f.body.S_u);
+  G.block<1, 7>(1, 0) += d.transpose() * contact::DirectionJacobian(pf, eval_.f.body.S_v);
+  G.block<1, 7>(2, 7) -= d.transpose() * contact::DirectionJacobian(pg, eval_.g.body.S_u);
+  G.block<1, 7>(3, 7) -= d.transpose() * contact::DirectionJacobian(pg, eval_.g.body.S_v);
+  Eigen::Matrix4d H_ff = eval_.hess;
+  for (int i = 0; i < 4; ++i) {
+    if (!ext_.at_bound[static_cast<size_t>(i)]) continue;
+    H_ff.row(i).setZero();
+    H_ff.col(i).setZero();
+    H_ff(i, i) = 1.0;
+    G.row(i).setZero();
+  }
+  contact::Matrix4x14 u_q = contact::Matrix4x14::Zero();
+  const Eigen::FullPivLU<Eigen::Matrix4d> lu(H_ff);
+  if (lu.isInvertible()) u_q = -lu.solve(G);
+  Eigen::Matrix<double, 3, 4> J_u;
+  J_u << a.S_u, a.S_v, -b.S_u, -b.S_v;
+  const double beta = std::abs(ext_.beta) > 1e-12 ? ext_.beta : (ext_.beta < 0.0 ? -1e-12 : 1e-12);
+  const Eigen::Matrix<double, 3, 14> n_q =
+      (Eigen::Matrix3d::Identity() - n * n.transpose()) * (P + J_u * u_q) / beta;
+  Matrix14 H = P.transpose() * n_q;
+  Eigen::Matrix<double, 2, 14> V_f = Eigen::Matrix<double, 2, 14>::Zero(),
+                               V_g = Eigen::Matrix<double, 2, 14>::Zero();
+  V_f.block<1, 7>(0, 0) = n.transpose() * contact::DirectionJacobian(pf, eval_.f.body.S_u);
+  V_f.block<1, 7>(1, 0) = n.transpose() * contact::DirectionJacobian(pf, eval_.f.body.S_v);
+  V_g.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(pg, eval_.g.body.S_u);
+  V_g.block<1, 7>(1, 7) = n.transpose() * contact::DirectionJacobian(pg, eval_.g.body.S_v);
+  H.noalias() += V_f.transpose() * u_q.topRows<2>() - V_g.transpose() * u_q.bottomRows<2>();
+  Split(H, w, h);
+  h->W_a.noalias() += (w * n) * eval_.f.body.S.transpose();
+  h->W_b.noalias() -= (w * n) * eval_.g.body.S.transpose();
+}
+
 void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses,
                                             const Eigen::Ref<const Eigen::VectorXd>& w,
                                             TermHessian* h) const {
@@ -96,18 +148,7 @@ void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses,
   const bool at_bound =
       std::any_of(ext_.at_bound.begin(), ext_.at_bound.end(), [](bool b) { return b; });
   if (at_bound) {
-    // An edge or corner extremum: β = |d| signed. Its Hessian at fixed parameters is
-    // P'(I − nn')P/|β| plus the rotations' curvature; the free parameters' motion along the
-    // edge is left out (a Gauss–Newton-like model: contacts at trims and edges, issue 16, get
-    // the edge's own constraint).
-    Eigen::Matrix<double, 3, 14> P;
-    P << contact::PointJacobian(pf, eval_.f.body.S), -contact::PointJacobian(pg, eval_.g.body.S);
-    const double dist = std::max(std::abs(ext_.beta), 1e-12);
-    const Matrix14 H =
-        P.transpose() * ((Eigen::Matrix3d::Identity() - n * n.transpose()) / dist) * P;
-    Split(H * (ext_.beta < 0.0 ? -1.0 : 1.0), w[0], h);
-    h->W_a.noalias() += (w[0] * n) * eval_.f.body.S.transpose();
-    h->W_b.noalias() -= (w[0] * n) * eval_.g.body.S.transpose();
+    AddBoundaryHessian(pf, pg, w[0], h);
     return;
   }
   contact::Matrix4x14 u_q;

@@ -58,6 +58,8 @@ class SurfaceContactTerm final : public Term {
 
  private:
   void Update(const std::vector<BodyPose>& poses) const;
+  /// ∇²β at an edge or corner extremum (contacts.cc), weighted by w, into *h.
+  void AddBoundaryHessian(const BodyPose& pf, const BodyPose& pg, double w, TermHessian* h) const;
 
   bool active_ = true;
   int body_f_, body_g_;
