@@ -45,7 +45,7 @@ struct Setup {
     s.Solve(&q);
     for (int k = 1; k <= g_steps; ++k) {
       start.push_back(q);
-      goal->set_target(testing::FourBar::PathPoint(k));
+      SetGoalTarget(s.data(), *goal, testing::FourBar::PathPoint(k));
       s.Solve(&q);
       ours.push_back(q);
     }
@@ -163,6 +163,11 @@ class FourBarNlp : public Ipopt::TNLP {
   }
   const Problem& p_;
   ProblemEvaluator ev_;
+
+ public:
+  ProblemData& data() { return ev_.data(); }
+
+ private:
   int n_ = 0, m_ = 0;
   Eigen::VectorXd q0_, q_, x_, w_;
   Eigen::MatrixXd M_, H_;
@@ -179,6 +184,7 @@ struct IpoptPeer {
     app->Options()->SetStringValue("hessian_approximation", "exact");
     app->Initialize();
   }
+  ProblemData& data() { return nlp->data(); }
   Eigen::VectorXd Solve(const Eigen::VectorXd& q0) {
     nlp->Reset(q0);
     app->OptimizeTNLP(nlp);
@@ -194,6 +200,7 @@ struct Slsqp {
   Eigen::VectorXd q0, q, grad;
   Eigen::MatrixXd M;
   nlopt_opt opt;
+  ProblemData& data() { return ev.data(); }
   explicit Slsqp(const Problem& problem) : p(problem), ev(problem) {
     const int n = p.mechanism().num_coordinates();
     opt = nlopt_create(NLOPT_LD_SLSQP, static_cast<unsigned>(n));
@@ -240,12 +247,13 @@ struct Slsqp {
 
 // ---- Benchmarks -----------------------------------------------------------------------------
 
+// `data`: the solver's own (its goal target).
 template <class Solve>
-void Cycle(benchmark::State& state, Solve&& solve) {
+void Cycle(benchmark::State& state, ProblemData& data, Solve&& solve) {
   Setup& s = GetSetup();
   size_t k = 0;
   for (auto _ : state) {
-    s.goal->set_target(testing::FourBar::PathPoint(static_cast<int>(k) + 1));
+    SetGoalTarget(data, *s.goal, testing::FourBar::PathPoint(static_cast<int>(k) + 1));
     benchmark::DoNotOptimize(solve(s.start[k]));
     k = (k + 1) % s.start.size();
   }
@@ -255,18 +263,18 @@ void BM_Ours(benchmark::State& state) {
   Setup& s = GetSetup();
   Solver solver(s.problem);
   Eigen::VectorXd q;
-  Cycle(state, [&](const Eigen::VectorXd& q0) {
+  Cycle(state, solver.data(), [&](const Eigen::VectorXd& q0) {
     q = q0;
     return solver.Solve(&q).iterations;
   });
 }
 void BM_Ipopt(benchmark::State& state) {
   IpoptPeer ipopt(GetSetup().problem);
-  Cycle(state, [&](const Eigen::VectorXd& q0) { return ipopt.Solve(q0)[0]; });
+  Cycle(state, ipopt.data(), [&](const Eigen::VectorXd& q0) { return ipopt.Solve(q0)[0]; });
 }
 void BM_Slsqp(benchmark::State& state) {
   Slsqp slsqp(GetSetup().problem);
-  Cycle(state, [&](const Eigen::VectorXd& q0) { return slsqp.Solve(q0)[0]; });
+  Cycle(state, slsqp.data(), [&](const Eigen::VectorXd& q0) { return slsqp.Solve(q0)[0]; });
 }
 
 // Whole path per solver, identical starting points: per-solve times and accuracy against ours.
@@ -276,14 +284,15 @@ struct PathResult {
 };
 
 template <class Solve>
-PathResult RunPath(Solve&& solve) {
+PathResult RunPath(ProblemData& data, Solve&& solve) {
   Setup& s = GetSetup();
   PathResult r;
   ProblemEvaluator ev(s.problem);
   std::vector<BodyPose> a, b;
   Eigen::MatrixXd M;
   for (size_t k = 0; k < s.start.size(); ++k) {
-    s.goal->set_target(testing::FourBar::PathPoint(static_cast<int>(k) + 1));
+    SetGoalTarget(data, *s.goal, testing::FourBar::PathPoint(static_cast<int>(k) + 1));
+    SetGoalTarget(ev.data(), *s.goal, testing::FourBar::PathPoint(static_cast<int>(k) + 1));
     const auto t0 = std::chrono::steady_clock::now();
     const Eigen::VectorXd q = solve(s.start[k]);
     r.us.push_back(
@@ -317,18 +326,20 @@ void Report() {
   Slsqp slsqp(s.problem);
   Eigen::VectorXd q;
   // Ours twice: the first pass warms caches; report the second.
-  RunPath([&](const Eigen::VectorXd& q0) {
+  RunPath(solver.data(), [&](const Eigen::VectorXd& q0) {
     q = q0;
     solver.Solve(&q);
     return q;
   });
-  const PathResult ours = RunPath([&](const Eigen::VectorXd& q0) {
+  const PathResult ours = RunPath(solver.data(), [&](const Eigen::VectorXd& q0) {
     q = q0;
     solver.Solve(&q);
     return q;
   });
-  const PathResult ip = RunPath([&](const Eigen::VectorXd& q0) { return ipopt.Solve(q0); });
-  const PathResult sl = RunPath([&](const Eigen::VectorXd& q0) { return slsqp.Solve(q0); });
+  const PathResult ip =
+      RunPath(ipopt.data(), [&](const Eigen::VectorXd& q0) { return ipopt.Solve(q0); });
+  const PathResult sl =
+      RunPath(slsqp.data(), [&](const Eigen::VectorXd& q0) { return slsqp.Solve(q0); });
   std::printf("\nFour-bar warm solves along the %zu-step path (identical starting points), us:\n",
               s.start.size());
   std::printf("%-12s %10s %10s %14s %16s %14s\n", "solver", "median", "p99", "worst viol.",

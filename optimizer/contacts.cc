@@ -37,80 +37,75 @@ bool SamePose(const Vector7d& a, const Vector7d& b) { return (a.array() == b.arr
 
 SurfaceContactTerm::SurfaceContactTerm(int body_f, const nurbs::NurbsSurface* f, int body_g,
                                        const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed)
-    : body_f_(body_f), body_g_(body_g), f_(f), g_(g), u_(seed) {
+    : body_f_(body_f), body_g_(body_g), f_(f), g_(g), seed_(seed) {
   if (!f || !g) throw std::invalid_argument("surface contact: null surface");
   if (body_f == body_g) throw std::invalid_argument("surface contact: both surfaces on one body");
   if (!seed.allFinite()) throw std::invalid_argument("surface contact: non-finite seed");
 }
 
-void SurfaceContactTerm::Reseed(const Eigen::Vector4d& u) const {
-  u_ = u;
-  valid_ = false;
+std::unique_ptr<TermState> SurfaceContactTerm::MakeState() const {
+  auto st = std::make_unique<State>();
+  st->u = seed_;
+  return st;
 }
 
-void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses) const {
+void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) const {
   const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
   const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
-  if (valid_ && SamePose(pf.q, q_f_) && SamePose(pg.q, q_g_)) return;
-  ext_ = contact::SolveSurfaceSurface(*f_, pf, *g_, pg, u_, {}, &eval_);
-  u_ = ext_.u;
-  q_f_ = pf.q;
-  q_g_ = pg.q;
-  valid_ = true;
+  if (st->valid && SamePose(pf.q, st->q_f) && SamePose(pg.q, st->q_g)) return;
+  st->ext = contact::SolveSurfaceSurface(*f_, pf, *g_, pg, st->u, {}, &st->eval);
+  st->u = st->ext.u;
+  st->q_f = pf.q;
+  st->q_g = pg.q;
+  st->valid = true;
 }
 
-void SurfaceContactTerm::Activate(const Eigen::Vector4d& u) {
-  active_ = true;
-  Reseed(u);
-}
-
-void SurfaceContactTerm::Deactivate() { active_ = false; }
-
-void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                                  Eigen::Ref<Eigen::MatrixXd> J_a,
+void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState* state,
+                                  Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                                   Eigen::Ref<Eigen::MatrixXd> J_b) const {
-  if (!active_) {  // a free slot: far apart, no gradient, nothing evaluated
+  auto* st = static_cast<State*>(state);
+  if (!st->active) {  // a free slot: far apart, no gradient, nothing evaluated
     r[0] = kInactiveDistance;
     J_a.setZero();
     J_b.setZero();
     return;
   }
-  Update(poses);
+  Update(poses, st);
   const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
   const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
   // β along the direction the extremum measures it: g's normal at an interior extremum, the
   // line between the points at an edge or corner one (where d is not along a normal). Either
   // way ∂β/∂q = n·∂(f − g)/∂q at fixed parameters (the free parameters are stationary).
-  const Eigen::Vector3d& n = ext_.direction;
-  r[0] = ext_.beta;
-  J_a = n.transpose() * contact::PointJacobian(pf, eval_.f.body.S);
-  J_b = -n.transpose() * contact::PointJacobian(pg, eval_.g.body.S);
+  const Eigen::Vector3d& n = st->ext.direction;
+  r[0] = st->ext.beta;
+  J_a = n.transpose() * contact::PointJacobian(pf, st->eval.f.body.S);
+  J_b = -n.transpose() * contact::PointJacobian(pg, st->eval.g.body.S);
 }
 
-void SurfaceContactTerm::AddBoundaryHessian(const BodyPose& pf, const BodyPose& pg, double w,
-                                            TermHessian* h) const {
+void SurfaceContactTerm::AddBoundaryHessian(const State& st, const BodyPose& pf, const BodyPose& pg,
+                                            double w, TermHessian* h) const {
   // An edge or corner extremum: β = |d| signed, n = d/β. The free parameters stay stationary
   // for ½|d|² (the held ones stay on their bounds), so with grad = [d·f_u, d·f_v, −d·g_s,
   // −d·g_t] their motion is u_q = −hess_FF⁻¹ ∂grad_F/∂q, and with D = ∂d/∂q = P + J_u u_q:
   //   ∇²β = Pᵀ n_q + V_fᵀ u_q^f − V_gᵀ u_q^g + n·∂²(f − g)/∂q²|_u,   n_q = (I − nnᵀ) D / β.
-  const nurbs::SurfacePoint& a = eval_.f.world;
-  const nurbs::SurfacePoint& b = eval_.g.world;
-  const Eigen::Vector3d& d = eval_.d;
-  const Eigen::Vector3d& n = ext_.direction;
+  const nurbs::SurfacePoint& a = st.eval.f.world;
+  const nurbs::SurfacePoint& b = st.eval.g.world;
+  const Eigen::Vector3d& d = st.eval.d;
+  const Eigen::Vector3d& n = st.ext.direction;
   Eigen::Matrix<double, 3, 14> P;
-  P << contact::PointJacobian(pf, eval_.f.body.S), -contact::PointJacobian(pg, eval_.g.body.S);
+  P << contact::PointJacobian(pf, st.eval.f.body.S), -contact::PointJacobian(pg, st.eval.g.body.S);
   Eigen::Matrix<double, 4, 14> G;  // ∂grad/∂q at fixed parameters
   G.row(0) = a.S_u.transpose() * P;
   G.row(1) = a.S_v.transpose() * P;
   G.row(2) = -b.S_u.transpose() * P;
   G.row(3) = -b.S_v.transpose() * P;
-  G.block<1, 7>(0, 0) += d.transpose() * contact::DirectionJacobian(pf, eval_.f.body.S_u);
-  G.block<1, 7>(1, 0) += d.transpose() * contact::DirectionJacobian(pf, eval_.f.body.S_v);
-  G.block<1, 7>(2, 7) -= d.transpose() * contact::DirectionJacobian(pg, eval_.g.body.S_u);
-  G.block<1, 7>(3, 7) -= d.transpose() * contact::DirectionJacobian(pg, eval_.g.body.S_v);
-  Eigen::Matrix4d H_ff = eval_.hess;
+  G.block<1, 7>(0, 0) += d.transpose() * contact::DirectionJacobian(pf, st.eval.f.body.S_u);
+  G.block<1, 7>(1, 0) += d.transpose() * contact::DirectionJacobian(pf, st.eval.f.body.S_v);
+  G.block<1, 7>(2, 7) -= d.transpose() * contact::DirectionJacobian(pg, st.eval.g.body.S_u);
+  G.block<1, 7>(3, 7) -= d.transpose() * contact::DirectionJacobian(pg, st.eval.g.body.S_v);
+  Eigen::Matrix4d H_ff = st.eval.hess;
   for (int i = 0; i < 4; ++i) {
-    if (!ext_.at_bound[static_cast<size_t>(i)]) continue;
+    if (!st.ext.at_bound[static_cast<size_t>(i)]) continue;
     H_ff.row(i).setZero();
     H_ff.col(i).setZero();
     H_ff(i, i) = 1.0;
@@ -121,60 +116,63 @@ void SurfaceContactTerm::AddBoundaryHessian(const BodyPose& pf, const BodyPose& 
   if (lu.isInvertible()) u_q = -lu.solve(G);
   Eigen::Matrix<double, 3, 4> J_u;
   J_u << a.S_u, a.S_v, -b.S_u, -b.S_v;
-  const double beta = std::abs(ext_.beta) > 1e-12 ? ext_.beta : (ext_.beta < 0.0 ? -1e-12 : 1e-12);
+  const double beta =
+      std::abs(st.ext.beta) > 1e-12 ? st.ext.beta : (st.ext.beta < 0.0 ? -1e-12 : 1e-12);
   const Eigen::Matrix<double, 3, 14> n_q =
       (Eigen::Matrix3d::Identity() - n * n.transpose()) * (P + J_u * u_q) / beta;
   Matrix14 H = P.transpose() * n_q;
   Eigen::Matrix<double, 2, 14> V_f = Eigen::Matrix<double, 2, 14>::Zero(),
                                V_g = Eigen::Matrix<double, 2, 14>::Zero();
-  V_f.block<1, 7>(0, 0) = n.transpose() * contact::DirectionJacobian(pf, eval_.f.body.S_u);
-  V_f.block<1, 7>(1, 0) = n.transpose() * contact::DirectionJacobian(pf, eval_.f.body.S_v);
-  V_g.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(pg, eval_.g.body.S_u);
-  V_g.block<1, 7>(1, 7) = n.transpose() * contact::DirectionJacobian(pg, eval_.g.body.S_v);
+  V_f.block<1, 7>(0, 0) = n.transpose() * contact::DirectionJacobian(pf, st.eval.f.body.S_u);
+  V_f.block<1, 7>(1, 0) = n.transpose() * contact::DirectionJacobian(pf, st.eval.f.body.S_v);
+  V_g.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(pg, st.eval.g.body.S_u);
+  V_g.block<1, 7>(1, 7) = n.transpose() * contact::DirectionJacobian(pg, st.eval.g.body.S_v);
   H.noalias() += V_f.transpose() * u_q.topRows<2>() - V_g.transpose() * u_q.bottomRows<2>();
   Split(H, w, h);
-  h->W_a.noalias() += (w * n) * eval_.f.body.S.transpose();
-  h->W_b.noalias() -= (w * n) * eval_.g.body.S.transpose();
+  h->W_a.noalias() += (w * n) * st.eval.f.body.S.transpose();
+  h->W_b.noalias() -= (w * n) * st.eval.g.body.S.transpose();
 }
 
-void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses,
+void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
                                             const Eigen::Ref<const Eigen::VectorXd>& w,
                                             TermHessian* h) const {
-  if (!active_) return;
-  Update(poses);
+  auto* st = static_cast<State*>(state);
+  if (!st->active) return;
+  Update(poses, st);
   const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
   const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
-  const Eigen::Vector3d& n = ext_.direction;
+  const Eigen::Vector3d& n = st->ext.direction;
   const bool at_bound =
-      std::any_of(ext_.at_bound.begin(), ext_.at_bound.end(), [](bool b) { return b; });
+      std::any_of(st->ext.at_bound.begin(), st->ext.at_bound.end(), [](bool b) { return b; });
   if (at_bound) {
-    AddBoundaryHessian(pf, pg, w[0], h);
+    AddBoundaryHessian(*st, pf, pg, w[0], h);
     return;
   }
   contact::Matrix4x14 u_q;
-  const bool regular = contact::ContactJacobianClosedForm(eval_, pf, pg, &u_q);
+  const bool regular = contact::ContactJacobianClosedForm(st->eval, pf, pg, &u_q);
   if (!regular) u_q.setZero();
   // P = ∂(f − g)/∂q at fixed parameters.
   Eigen::Matrix<double, 3, 14> P;
-  P << contact::PointJacobian(pf, eval_.f.body.S), -contact::PointJacobian(pg, eval_.g.body.S);
+  P << contact::PointJacobian(pf, st->eval.f.body.S),
+      -contact::PointJacobian(pg, st->eval.g.body.S);
   // n_q: rotation of G and the change of (s, t).
   Eigen::Matrix<double, 3, 14> n_q = Eigen::Matrix<double, 3, 14>::Zero();
   n_q.rightCols<7>() = contact::DirectionJacobian(pg, pg.R.transpose() * n);
-  n_q += UnitNormalPartial(eval_.g.N, eval_.g.N_u) * u_q.row(2) +
-         UnitNormalPartial(eval_.g.N, eval_.g.N_v) * u_q.row(3);
+  n_q += UnitNormalPartial(st->eval.g.N, st->eval.g.N_u) * u_q.row(2) +
+         UnitNormalPartial(st->eval.g.N, st->eval.g.N_v) * u_q.row(3);
   Matrix14 H = P.transpose() * n_q;
   // n·∂P/∂u u_q: the points' Jacobians change with the parameters.
   Eigen::Matrix<double, 2, 14> V_f = Eigen::Matrix<double, 2, 14>::Zero(),
                                V_g = Eigen::Matrix<double, 2, 14>::Zero();
-  V_f.block<1, 7>(0, 0) = n.transpose() * contact::DirectionJacobian(pf, eval_.f.body.S_u);
-  V_f.block<1, 7>(1, 0) = n.transpose() * contact::DirectionJacobian(pf, eval_.f.body.S_v);
-  V_g.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(pg, eval_.g.body.S_u);
-  V_g.block<1, 7>(1, 7) = n.transpose() * contact::DirectionJacobian(pg, eval_.g.body.S_v);
+  V_f.block<1, 7>(0, 0) = n.transpose() * contact::DirectionJacobian(pf, st->eval.f.body.S_u);
+  V_f.block<1, 7>(1, 0) = n.transpose() * contact::DirectionJacobian(pf, st->eval.f.body.S_v);
+  V_g.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(pg, st->eval.g.body.S_u);
+  V_g.block<1, 7>(1, 7) = n.transpose() * contact::DirectionJacobian(pg, st->eval.g.body.S_v);
   H.noalias() += V_f.transpose() * u_q.topRows<2>() - V_g.transpose() * u_q.bottomRows<2>();
   Split(H, w[0], h);
   // n·∂²(f − g)/∂q² at fixed parameters: the rotations' curvature.
-  h->W_a.noalias() += (w[0] * n) * eval_.f.body.S.transpose();
-  h->W_b.noalias() -= (w[0] * n) * eval_.g.body.S.transpose();
+  h->W_a.noalias() += (w[0] * n) * st->eval.f.body.S.transpose();
+  h->W_b.noalias() -= (w[0] * n) * st->eval.g.body.S.transpose();
 }
 
 // ---- Point on surface ----------------------------------------------------------------------
@@ -182,45 +180,53 @@ void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses,
 PointOnSurfaceTerm::PointOnSurfaceTerm(const Attachment& point, int body_s,
                                        const nurbs::NurbsSurface* surface,
                                        const Eigen::Vector2d& seed)
-    : point_(point), body_s_(body_s), s_(surface), u_(seed) {
+    : point_(point), body_s_(body_s), s_(surface), seed_(seed) {
   if (!surface) throw std::invalid_argument("point on surface: null surface");
   if (point.body == body_s)
     throw std::invalid_argument("point on surface: point on the surface's body");
   if (!seed.allFinite()) throw std::invalid_argument("point on surface: non-finite seed");
 }
 
-void PointOnSurfaceTerm::Update(const std::vector<BodyPose>& poses) const {
-  const BodyPose& pa = poses[static_cast<size_t>(point_.body)];
-  const BodyPose& ps = poses[static_cast<size_t>(body_s_)];
-  if (valid_ && SamePose(pa.q, q_a_) && SamePose(ps.q, q_s_)) return;
-  ext_ = contact::SolvePointSurface(pa.Point(point_.point), *s_, ps, u_, {}, &eval_);
-  u_ = ext_.u;
-  q_a_ = pa.q;
-  q_s_ = ps.q;
-  valid_ = true;
+std::unique_ptr<TermState> PointOnSurfaceTerm::MakeState() const {
+  auto st = std::make_unique<State>();
+  st->u = seed_;
+  return st;
 }
 
-void PointOnSurfaceTerm::Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                                  Eigen::Ref<Eigen::MatrixXd> J_a,
+void PointOnSurfaceTerm::Update(const std::vector<BodyPose>& poses, State* st) const {
+  const BodyPose& pa = poses[static_cast<size_t>(point_.body)];
+  const BodyPose& ps = poses[static_cast<size_t>(body_s_)];
+  if (st->valid && SamePose(pa.q, st->q_a) && SamePose(ps.q, st->q_s)) return;
+  st->ext = contact::SolvePointSurface(pa.Point(point_.point), *s_, ps, st->u, {}, &st->eval);
+  st->u = st->ext.u;
+  st->q_a = pa.q;
+  st->q_s = ps.q;
+  st->valid = true;
+}
+
+void PointOnSurfaceTerm::Evaluate(const std::vector<BodyPose>& poses, TermState* state,
+                                  Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                                   Eigen::Ref<Eigen::MatrixXd> J_b) const {
-  Update(poses);
+  auto* st = static_cast<State*>(state);
+  Update(poses, st);
   const BodyPose& pa = poses[static_cast<size_t>(point_.body)];
   const BodyPose& ps = poses[static_cast<size_t>(body_s_)];
-  const Eigen::Vector3d n = eval_.N.normalized();
-  r[0] = (pa.Point(point_.point) - eval_.world.S).dot(n);
+  const Eigen::Vector3d n = st->eval.N.normalized();
+  r[0] = (pa.Point(point_.point) - st->eval.world.S).dot(n);
   J_a = n.transpose() * contact::PointJacobian(pa, point_.point);
-  J_b = -n.transpose() * contact::PointJacobian(ps, eval_.body.S);
+  J_b = -n.transpose() * contact::PointJacobian(ps, st->eval.body.S);
 }
 
-void PointOnSurfaceTerm::AddWeightedHessian(const std::vector<BodyPose>& poses,
+void PointOnSurfaceTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
                                             const Eigen::Ref<const Eigen::VectorXd>& w,
                                             TermHessian* h) const {
-  Update(poses);
+  auto* st = static_cast<State*>(state);
+  Update(poses, st);
   const BodyPose& pa = poses[static_cast<size_t>(point_.body)];
   const BodyPose& ps = poses[static_cast<size_t>(body_s_)];
-  const nurbs::SurfacePoint& b = eval_.body;
-  const nurbs::SurfacePoint& s = eval_.world;
-  const Eigen::Vector3d n = eval_.N.normalized();
+  const nurbs::SurfacePoint& b = st->eval.body;
+  const nurbs::SurfacePoint& s = st->eval.world;
+  const Eigen::Vector3d n = st->eval.N.normalized();
   const Eigen::Vector3d d = pa.Point(point_.point) - s.S;
   Eigen::Matrix<double, 3, 14> P;
   P << contact::PointJacobian(pa, point_.point), -contact::PointJacobian(ps, b.S);
@@ -238,8 +244,8 @@ void PointOnSurfaceTerm::AddWeightedHessian(const std::vector<BodyPose>& poses,
   if (std::abs(det) > 1e-12 * F_u.squaredNorm()) u_q = -F_u.inverse() * F_q;
   Eigen::Matrix<double, 3, 14> n_q = Eigen::Matrix<double, 3, 14>::Zero();
   n_q.rightCols<7>() = contact::DirectionJacobian(ps, ps.R.transpose() * n);
-  n_q += UnitNormalPartial(eval_.N, eval_.N_u) * u_q.row(0) +
-         UnitNormalPartial(eval_.N, eval_.N_v) * u_q.row(1);
+  n_q += UnitNormalPartial(st->eval.N, st->eval.N_u) * u_q.row(0) +
+         UnitNormalPartial(st->eval.N, st->eval.N_v) * u_q.row(1);
   Matrix14 H = P.transpose() * n_q;
   Eigen::Matrix<double, 2, 14> V = Eigen::Matrix<double, 2, 14>::Zero();
   V.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(ps, b.S_u);

@@ -13,7 +13,7 @@ namespace tangent::optimizer {
 /// "floating contact" β = 0 (the surfaces touch and may roll and slide), as an inequality
 /// non-penetration β ≥ 0.
 ///
-/// The pair's parameters (u, v, s, t) are tracked inside the term: each evaluation at new poses
+/// The pair's parameters (u, v, s, t) are tracked in the term's State: each evaluation at new poses
 /// runs the extremal Newton solver from the last parameters (contact::SolveSurfaceSurface,
 /// allocation free), so the parameters follow the motion and β is exact to the solver's
 /// tolerance. Derivatives (docs/optimizer.md "Contact terms"):
@@ -24,9 +24,36 @@ namespace tangent::optimizer {
 /// Jacobian (contact::ContactJacobianClosedForm). Where u_q is singular the u-terms are dropped
 /// (Gauss–Newton in those directions).
 ///
-/// Not thread safe: the tracked parameters are mutable state of the term, as the tracker's are.
+/// The tracked parameters, the last extremum and evaluation, and whether the slot is active are
+/// per-solve data (State, in the solver's ProblemData); the term itself is immutable.
 class SurfaceContactTerm final : public Term {
  public:
+  struct State final : TermState {
+    bool active = true;
+    Eigen::Vector4d u;  ///< tracked (u, v, s, t)
+    Vector7d q_f, q_g;  ///< poses of the last evaluation
+    bool valid = false;
+    contact::SurfaceSurfaceExtremum ext;
+    contact::SurfacePairEval eval;
+    /// The extremum at the last evaluated poses (parameters, β, points, status).
+    const contact::SurfaceSurfaceExtremum& extremum() const { return ext; }
+    /// Restarts tracking from new parameters (after a global contact search).
+    void Reseed(const Eigen::Vector4d& u_new) {
+      u = u_new;
+      valid = false;
+    }
+    /// Contact slots (the server's way of adding and dropping contacts without changing the
+    /// problem's structure): an inactive term evaluates nothing and reports β =
+    /// kInactiveDistance with zero derivatives, which as an inequality (β ≥ 0) is inactive and
+    /// gets multiplier 0. Not for equalities. Activate restarts tracking from u (a global-stage
+    /// contact event).
+    void Activate(const Eigen::Vector4d& u_new) {
+      active = true;
+      Reseed(u_new);
+    }
+    void Deactivate() { active = false; }
+  };
+
   /// The surfaces must outlive the term. `seed`: (u, v, s, t) near the extremum to follow.
   SurfaceContactTerm(int body_f, const nurbs::NurbsSurface* f, int body_g,
                      const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed);
@@ -35,41 +62,27 @@ class SurfaceContactTerm final : public Term {
   int dim() const override { return 1; }
   int body_a() const override { return body_f_; }
   int body_b() const override { return body_g_; }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
+                Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                Eigen::Ref<Eigen::MatrixXd> J_b) const override;
   bool has_hessian() const override { return true; }
-  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+  void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* /*state*/,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override;
 
-  /// The extremum at the last evaluated poses (parameters, β, points, status).
-  const contact::SurfaceSurfaceExtremum& extremum() const { return ext_; }
-  /// Restarts tracking from new parameters (after a global contact search).
-  void Reseed(const Eigen::Vector4d& u) const;
-
-  /// Contact slots (the server's way of adding and dropping contacts without changing the
-  /// problem's structure): an inactive term evaluates nothing and reports β = kInactiveDistance
-  /// with zero derivatives, which as an inequality (β ≥ 0) is inactive and gets multiplier 0.
-  /// Not for equalities. Activate restarts tracking from u (a global-stage contact event).
+  std::unique_ptr<TermState> MakeState() const override;
   static constexpr double kInactiveDistance = 1.0;  // m
-  void Activate(const Eigen::Vector4d& u);
-  void Deactivate();
-  bool active() const { return active_; }
 
  private:
-  void Update(const std::vector<BodyPose>& poses) const;
+  void Update(const std::vector<BodyPose>& poses, State* st) const;
   /// ∇²β at an edge or corner extremum (contacts.cc), weighted by w, into *h.
-  void AddBoundaryHessian(const BodyPose& pf, const BodyPose& pg, double w, TermHessian* h) const;
+  void AddBoundaryHessian(const State& st, const BodyPose& pf, const BodyPose& pg, double w,
+                          TermHessian* h) const;
 
-  bool active_ = true;
   int body_f_, body_g_;
   const nurbs::NurbsSurface* f_;
   const nurbs::NurbsSurface* g_;
-  mutable Eigen::Vector4d u_;
-  mutable Vector7d q_f_, q_g_;
-  mutable bool valid_ = false;
-  mutable contact::SurfaceSurfaceExtremum ext_;
-  mutable contact::SurfacePairEval eval_;
+  Eigen::Vector4d seed_;
 };
 
 /// The signed distance from a point on body a (attachment point) to a surface on body b at the
@@ -77,6 +90,14 @@ class SurfaceContactTerm final : public Term {
 /// surface" as an inequality. Tracked and differentiated like SurfaceContactTerm.
 class PointOnSurfaceTerm final : public Term {
  public:
+  struct State final : TermState {
+    Eigen::Vector2d u;
+    Vector7d q_a, q_s;
+    bool valid = false;
+    contact::PointSurfaceExtremum ext;
+    contact::PlacedSurfacePoint eval;
+    const contact::PointSurfaceExtremum& extremum() const { return ext; }
+  };
   PointOnSurfaceTerm(const Attachment& point, int body_s, const nurbs::NurbsSurface* surface,
                      const Eigen::Vector2d& seed);
 
@@ -84,25 +105,22 @@ class PointOnSurfaceTerm final : public Term {
   int dim() const override { return 1; }
   int body_a() const override { return point_.body; }
   int body_b() const override { return body_s_; }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
+                Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                Eigen::Ref<Eigen::MatrixXd> J_b) const override;
   bool has_hessian() const override { return true; }
-  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+  void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* /*state*/,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override;
-  const contact::PointSurfaceExtremum& extremum() const { return ext_; }
+  std::unique_ptr<TermState> MakeState() const override;
 
  private:
-  void Update(const std::vector<BodyPose>& poses) const;
+  void Update(const std::vector<BodyPose>& poses, State* st) const;
 
   Attachment point_;
   int body_s_;
   const nurbs::NurbsSurface* s_;
-  mutable Eigen::Vector2d u_;
-  mutable Vector7d q_a_, q_s_;
-  mutable bool valid_ = false;
-  mutable contact::PointSurfaceExtremum ext_;
-  mutable contact::PlacedSurfacePoint eval_;
+  Eigen::Vector2d seed_;
 };
 
 std::shared_ptr<SurfaceContactTerm> MakeSurfaceContact(int body_f, const nurbs::NurbsSurface* f,

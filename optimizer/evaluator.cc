@@ -5,7 +5,7 @@
 namespace tangent::optimizer {
 
 ProblemEvaluator::ProblemEvaluator(const Problem& problem, bool dense_jacobians)
-    : problem_(problem), dense_jacobians_(dense_jacobians) {
+    : problem_(problem), data_(problem), dense_jacobians_(dense_jacobians) {
   const Mechanism& m = problem.mechanism();
   const int n = m.num_coordinates();
   m.Poses(m.InitialCoordinates(), &poses_);
@@ -16,9 +16,11 @@ ProblemEvaluator::ProblemEvaluator(const Problem& problem, bool dense_jacobians)
     J_a_[k].setZero(rows[k], 7);
     J_b_[k].setZero(rows[k], 7);
     if (dense_jacobians_) dense_[k].setZero(rows[k], n);
+    int index = 0;
     for (const Problem::Entry& e : List(static_cast<Kind>(k))) {
       Item it;
       it.term = e.term.get();
+      it.state = data_.state(k, index++);
       it.weight = e.weight;
       it.row = e.row;
       it.dim = e.term->dim();
@@ -65,7 +67,7 @@ void ProblemEvaluator::Evaluate(const Eigen::VectorXd& q) {
     for (const Item& it : items_[k]) {
       auto ja = J_a_[k].middleRows(it.row, it.dim);
       auto jb = J_b_[k].middleRows(it.row, it.dim);
-      it.term->Evaluate(poses_, values_[k].segment(it.row, it.dim), ja, jb);
+      it.term->Evaluate(poses_, it.state, values_[k].segment(it.row, it.dim), ja, jb);
       if (it.block_b < 0) jb.setZero();
       if (it.block_a < 0) ja.setZero();
     }
@@ -187,7 +189,7 @@ void ProblemEvaluator::AddCurvature(Kind kind, const Eigen::VectorXd& weights, B
     const auto w = weights.segment(it.row, it.dim);
     if (!(w.array() != 0.0).any()) continue;
     h.SetZero();
-    it.term->AddWeightedHessian(poses_, w, &h);
+    it.term->AddWeightedHessian(poses_, it.state, w, &h);
     if (it.block_a >= 0) {
       H->Block(it.block_a, it.block_a) += h.aa;
       rotation_weights_[static_cast<size_t>(it.block_a)] += h.W_a;

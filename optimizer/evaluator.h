@@ -15,7 +15,9 @@ namespace tangent::optimizer {
 /// term's two 7-column blocks, and the products the solver needs (Jᵀv, Jx, JᵀDJ, the weighted
 /// curvature) are formed block by block into a BlockMatrix. With `dense_jacobians`, Evaluate
 /// also fills the dense stacked Jacobians (J_e(), J_i(), J_o()) that peer-solver adapters want.
-/// Storage is sized at construction; Evaluate and the products allocate nothing.
+/// Storage is sized at construction; Evaluate and the products allocate nothing. It owns the
+/// problem's per-solve data (ProblemData), so evaluators of one Problem may run on different
+/// threads.
 class ProblemEvaluator {
  public:
   enum Kind { kEquality = 0, kInequality = 1, kObjective = 2 };
@@ -56,6 +58,9 @@ class ProblemEvaluator {
                     Eigen::MatrixXd* H);
 
   const Problem& problem() const { return problem_; }
+  /// The terms' per-solve states (contacts' tracked parameters, goal targets).
+  ProblemData& data() { return data_; }
+  const ProblemData& data() const { return data_; }
   const std::vector<BodyPose>& poses() const { return poses_; }
   const Eigen::VectorXd& values(Kind kind) const { return values_[kind]; }
   const Eigen::VectorXd& c_e() const { return values_[kEquality]; }
@@ -69,6 +74,7 @@ class ProblemEvaluator {
  private:
   struct Item {
     const Term* term = nullptr;
+    TermState* state = nullptr;
     double weight = 1.0;
     int row = 0, dim = 0;
     int body_a = -1, body_b = -1;    // mechanism body indices
@@ -77,6 +83,7 @@ class ProblemEvaluator {
   const std::vector<Problem::Entry>& List(Kind kind) const;
 
   const Problem& problem_;
+  ProblemData data_;
   bool dense_jacobians_;
   std::vector<BodyPose> poses_;
   std::array<std::vector<Item>, 3> items_;

@@ -14,24 +14,31 @@ using Matrix37 = Eigen::Matrix<double, 3, 7>;
 
 OrientationGoalTerm::OrientationGoalTerm(int body, const Eigen::Matrix3d& R,
                                          const Eigen::Vector3d& w)
-    : body_(body), R_(R), w_(w) {
+    : body_(body), initial_R_(R), w_(w) {
   if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-9) {
     throw std::invalid_argument("orientation goal: target is not a rotation matrix");
   }
 }
 
-void OrientationGoalTerm::Evaluate(const std::vector<BodyPose>& poses,
+std::unique_ptr<TermState> OrientationGoalTerm::MakeState() const {
+  auto s = std::make_unique<State>();
+  s->R_target = initial_R_;
+  return s;
+}
+
+void OrientationGoalTerm::Evaluate(const std::vector<BodyPose>& poses, TermState* state,
                                    Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                                    Eigen::Ref<Eigen::MatrixXd>) const {
   const BodyPose& p = poses[static_cast<size_t>(body_)];
+  const Eigen::Matrix3d& R_target = static_cast<const State*>(state)->R_target;
   for (int i = 0; i < 3; ++i) {
     const Eigen::Vector3d e = Eigen::Vector3d::Unit(i);
-    r.segment<3>(3 * i) = w_[i] * (p.R * e - R_.col(i));
+    r.segment<3>(3 * i) = w_[i] * (p.R * e - R_target.col(i));
     J_a.middleRows<3>(3 * i) = w_[i] * contact::DirectionJacobian(p, e);
   }
 }
 
-void OrientationGoalTerm::AddWeightedHessian(const std::vector<BodyPose>&,
+void OrientationGoalTerm::AddWeightedHessian(const std::vector<BodyPose>&, TermState* /*state*/,
                                              const Eigen::Ref<const Eigen::VectorXd>& w,
                                              TermHessian* h) const {
   for (int i = 0; i < 3; ++i) {
@@ -39,28 +46,38 @@ void OrientationGoalTerm::AddWeightedHessian(const std::vector<BodyPose>&,
   }
 }
 
-void OrientationGoalTerm::set_target(const Eigen::Matrix3d& R_target) { R_ = R_target; }
-
 namespace {
 
 class Concat final : public Term {
  public:
+  struct State final : TermState {
+    std::unique_ptr<TermState> a, b;
+  };
   Concat(TermPtr a, TermPtr b) : a_(std::move(a)), b_(std::move(b)) {}
   std::string name() const override { return "pose_goal"; }
   int dim() const override { return a_->dim() + b_->dim(); }
   int body_a() const override { return a_->body_a(); }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+  std::unique_ptr<TermState> MakeState() const override {
+    auto s = std::make_unique<State>();
+    s->a = a_->MakeState();
+    s->b = b_->MakeState();
+    return s;
+  }
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* state, Eigen::Ref<Eigen::VectorXd> r,
                 Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override {
+    auto* s = static_cast<State*>(state);
     const int n = a_->dim();
-    a_->Evaluate(poses, r.head(n), J_a.topRows(n), J_b.topRows(n));
-    b_->Evaluate(poses, r.tail(b_->dim()), J_a.bottomRows(b_->dim()), J_b.bottomRows(b_->dim()));
+    a_->Evaluate(poses, s->a.get(), r.head(n), J_a.topRows(n), J_b.topRows(n));
+    b_->Evaluate(poses, s->b.get(), r.tail(b_->dim()), J_a.bottomRows(b_->dim()),
+                 J_b.bottomRows(b_->dim()));
   }
   bool has_hessian() const override { return a_->has_hessian() && b_->has_hessian(); }
-  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+  void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override {
-    a_->AddWeightedHessian(poses, w.head(a_->dim()), h);
-    b_->AddWeightedHessian(poses, w.tail(b_->dim()), h);
+    auto* s = static_cast<State*>(state);
+    a_->AddWeightedHessian(poses, s->a.get(), w.head(a_->dim()), h);
+    b_->AddWeightedHessian(poses, s->b.get(), w.tail(b_->dim()), h);
   }
 
  private:
@@ -73,8 +90,9 @@ class Aiming final : public Term {
   std::string name() const override { return "aiming_goal"; }
   int dim() const override { return 3; }
   int body_a() const override { return at_.body; }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd>) const override {
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
+                Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                Eigen::Ref<Eigen::MatrixXd>) const override {
     const BodyPose& p = poses[static_cast<size_t>(at_.body)];
     const Eigen::Vector3d P = p.Point(at_.point);
     const Eigen::Vector3d v = t_ - P;
@@ -100,14 +118,16 @@ class Line final : public Term {
   std::string name() const override { return "line_goal"; }
   int dim() const override { return 3; }
   int body_a() const override { return at_.body; }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd>) const override {
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
+                Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                Eigen::Ref<Eigen::MatrixXd>) const override {
     const BodyPose& p = poses[static_cast<size_t>(at_.body)];
     r = P_ * (p.Point(at_.point) - o_);
     J_a = P_ * contact::PointJacobian(p, at_.point);
   }
   bool has_hessian() const override { return true; }
-  void AddWeightedHessian(const std::vector<BodyPose>&, const Eigen::Ref<const Eigen::VectorXd>& w,
+  void AddWeightedHessian(const std::vector<BodyPose>&, TermState* /*state*/,
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override {
     h->W_a.noalias() += (P_ * w.head<3>()) * at_.point.transpose();
   }
@@ -126,8 +146,9 @@ class Plane final : public Term {
   std::string name() const override { return half_ ? "half_space_goal" : "plane_goal"; }
   int dim() const override { return 1; }
   int body_a() const override { return at_.body; }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd>) const override {
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
+                Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                Eigen::Ref<Eigen::MatrixXd>) const override {
     const BodyPose& p = poses[static_cast<size_t>(at_.body)];
     const double s = n_.dot(p.Point(at_.point) - o_);
     if (one_sided_ && s > 0) {
@@ -139,7 +160,7 @@ class Plane final : public Term {
     J_a = n_.transpose() * contact::PointJacobian(p, at_.point);
   }
   bool has_hessian() const override { return true; }
-  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+  void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* /*state*/,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override {
     const BodyPose& p = poses[static_cast<size_t>(at_.body)];
@@ -155,6 +176,12 @@ class Plane final : public Term {
 
 class Disjunction final : public Term {
  public:
+  struct State final : TermState {
+    std::vector<std::unique_ptr<TermState>> goals;
+    // Scratch, sized once: Evaluate stays allocation free.
+    Eigen::VectorXd r;
+    Eigen::MatrixXd ja, jb;
+  };
   explicit Disjunction(std::vector<TermPtr> goals) : goals_(std::move(goals)) {
     if (goals_.empty()) throw std::invalid_argument("disjunction goal: no goals");
     for (const auto& g : goals_) {
@@ -163,32 +190,39 @@ class Disjunction final : public Term {
         throw std::invalid_argument("disjunction goal: all goals must act on the same bodies");
       }
     }
-    r_.resize(dim_);
-    ja_.resize(dim_, 7);
-    jb_.resize(dim_, 7);
   }
   std::string name() const override { return "disjunction_goal"; }
   int dim() const override { return dim_; }
   int body_a() const override { return goals_[0]->body_a(); }
   int body_b() const override { return goals_[0]->body_b(); }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+  std::unique_ptr<TermState> MakeState() const override {
+    auto s = std::make_unique<State>();
+    for (const auto& g : goals_) s->goals.push_back(g->MakeState());
+    s->r.resize(dim_);
+    s->ja.resize(dim_, 7);
+    s->jb.resize(dim_, 7);
+    return s;
+  }
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* state, Eigen::Ref<Eigen::VectorXd> r,
                 Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override {
+    auto* s = static_cast<State*>(state);
     double best = INFINITY;
     r.setZero();
     J_a.setZero();
     J_b.setZero();
-    for (const auto& g : goals_) {
+    for (size_t k = 0; k < goals_.size(); ++k) {
+      const TermPtr& g = goals_[k];
       const int n = g->dim();
-      g->Evaluate(poses, r_.head(n), ja_.topRows(n), jb_.topRows(n));
-      const double v = r_.head(n).squaredNorm();
+      g->Evaluate(poses, s->goals[k].get(), s->r.head(n), s->ja.topRows(n), s->jb.topRows(n));
+      const double v = s->r.head(n).squaredNorm();
       if (v < best) {
         best = v;
         r.setZero();
         J_a.setZero();
         J_b.setZero();
-        r.head(n) = r_.head(n);
-        J_a.topRows(n) = ja_.topRows(n);
-        J_b.topRows(n) = jb_.topRows(n);
+        r.head(n) = s->r.head(n);
+        J_a.topRows(n) = s->ja.topRows(n);
+        J_b.topRows(n) = s->jb.topRows(n);
       }
     }
   }
@@ -196,23 +230,25 @@ class Disjunction final : public Term {
  private:
   std::vector<TermPtr> goals_;
   int dim_ = 0;
-  // Scratch, sized once (Evaluate stays allocation free; not thread safe, like every Term's use
-  // by one solver).
-  mutable Eigen::VectorXd r_;
-  mutable Eigen::MatrixXd ja_, jb_;
 };
 
 }  // namespace
 
-void PositionGoalTerm::Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                                Eigen::Ref<Eigen::MatrixXd> J_a,
+std::unique_ptr<TermState> PositionGoalTerm::MakeState() const {
+  auto s = std::make_unique<State>();
+  s->target = initial_target_;
+  return s;
+}
+
+void PositionGoalTerm::Evaluate(const std::vector<BodyPose>& poses, TermState* state,
+                                Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                                 Eigen::Ref<Eigen::MatrixXd>) const {
   const BodyPose& p = poses[static_cast<size_t>(at_.body)];
-  r = p.Point(at_.point) - target_;
+  r = p.Point(at_.point) - static_cast<const State*>(state)->target;
   J_a = contact::PointJacobian(p, at_.point);
 }
 
-void PositionGoalTerm::AddWeightedHessian(const std::vector<BodyPose>&,
+void PositionGoalTerm::AddWeightedHessian(const std::vector<BodyPose>&, TermState* /*state*/,
                                           const Eigen::Ref<const Eigen::VectorXd>& w,
                                           TermHessian* h) const {
   h->W_a.noalias() += w.head<3>() * at_.point.transpose();

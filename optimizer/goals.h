@@ -5,56 +5,75 @@
 #include <Eigen/Geometry>
 
 #include "optimizer/joints.h"
+#include "optimizer/problem.h"
 
 namespace tangent::optimizer {
 
 /// Goals of seed 002 §5 as terms: usable as weighted objectives (½ w |r|²) or hard constraints.
-/// Position: P − target (3 rows). The target moves with set_target (each servo tick: the hand).
+/// Position: P − target (3 rows). The target is per-solve data (each servo tick: the hand):
+/// `data.Of(goal).target = x` on the solving ProblemData; the constructor's is the initial one.
 class PositionGoalTerm final : public Term {
  public:
+  struct State final : TermState {
+    Eigen::Vector3d target;  ///< world (m)
+  };
   PositionGoalTerm(const Attachment& at, const Eigen::Vector3d& target_W)
-      : at_(at), target_(target_W) {}
-  void set_target(const Eigen::Vector3d& target_W) { target_ = target_W; }
-  const Eigen::Vector3d& target() const { return target_; }
+      : at_(at), initial_target_(target_W) {}
+  /// The target a new state starts with.
+  const Eigen::Vector3d& initial_target() const { return initial_target_; }
   std::string name() const override { return "position_goal"; }
   int dim() const override { return 3; }
   int body_a() const override { return at_.body; }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+  std::unique_ptr<TermState> MakeState() const override;
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* state, Eigen::Ref<Eigen::VectorXd> r,
                 Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
   bool has_hessian() const override { return true; }
-  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+  void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override;
 
  private:
   Attachment at_;
-  Eigen::Vector3d target_;
+  Eigen::Vector3d initial_target_;
 };
+/// Moves a position goal's target in a solve's data: `SetGoalTarget(solver.data(), *goal, x)`.
+inline void SetGoalTarget(ProblemData& data, const PositionGoalTerm& goal,
+                          const Eigen::Vector3d& target_W) {
+  data.Of(goal).target = target_W;
+}
 std::shared_ptr<PositionGoalTerm> MakePositionGoal(const Attachment& at,
                                                    const Eigen::Vector3d& target_W);
 TermPtr PositionGoal(const Attachment& at, const Eigen::Vector3d& target_W);
 /// Orientation with per-axis weights: w_i (R e_i − R_target e_i), i = x, y, z (9 rows; a zero
-/// weight frees rotation that moves that axis only through the others).
+/// weight frees rotation that moves that axis only through the others). The target is per-solve
+/// data like PositionGoalTerm's (each servo tick of a 6-DOF device: the stylus); set it through
+/// SetTarget, which checks it.
 class OrientationGoalTerm final : public Term {
  public:
+  struct State final : TermState {
+    Eigen::Matrix3d R_target;  ///< world
+  };
   /// @throws std::invalid_argument when R_target is not a rotation.
   OrientationGoalTerm(int body, const Eigen::Matrix3d& R_target, const Eigen::Vector3d& weights);
-  /// Moves the target (each servo tick of a 6-DOF device: the stylus). @pre a rotation.
-  void set_target(const Eigen::Matrix3d& R_target);
-  const Eigen::Matrix3d& target() const { return R_; }
+  /// Moves the target in `state`. @pre a rotation (checked by the constructor only: the servo
+  /// passes normalized quaternions' matrices).
+  static void SetTarget(State* state, const Eigen::Matrix3d& R_target) {
+    state->R_target = R_target;
+  }
   std::string name() const override { return "orientation_goal"; }
   int dim() const override { return 9; }
   int body_a() const override { return body_; }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
+  std::unique_ptr<TermState> MakeState() const override;
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* state, Eigen::Ref<Eigen::VectorXd> r,
                 Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
   bool has_hessian() const override { return true; }
-  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+  void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override;
 
  private:
   int body_;
-  Eigen::Matrix3d R_;
+  Eigen::Matrix3d initial_R_;
   Eigen::Vector3d w_;
 };
 TermPtr OrientationGoal(int body, const Eigen::Matrix3d& R_target, const Eigen::Vector3d& weights);

@@ -262,13 +262,14 @@ class Joint final : public Term {
   }
   int body_a() const override { return a_.body; }
   int body_b() const override { return b_.body; }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override {
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
+                Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                Eigen::Ref<Eigen::MatrixXd> J_b) const override {
     Rows rows{r, J_a, J_b};
     Visit(poses, &rows);
   }
   bool has_hessian() const override { return true; }
-  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+  void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* /*state*/,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override {
     HessianRows rows{w, h};
@@ -304,15 +305,17 @@ class UnitQuaternionTerm final : public Term {
   std::string name() const override { return "unit_quaternion"; }
   int dim() const override { return 1; }
   int body_a() const override { return body_; }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd>) const override {
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
+                Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                Eigen::Ref<Eigen::MatrixXd>) const override {
     const Eigen::Vector4d Q = poses[static_cast<size_t>(body_)].q.tail<4>();
     r[0] = Q.squaredNorm() - 1.0;
     J_a.setZero();
     J_a.block<1, 4>(0, 3) = 2.0 * Q.transpose();
   }
   bool has_hessian() const override { return true; }
-  void AddWeightedHessian(const std::vector<BodyPose>&, const Eigen::Ref<const Eigen::VectorXd>& w,
+  void AddWeightedHessian(const std::vector<BodyPose>&, TermState* /*state*/,
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override {
     h->aa.block<4, 4>(3, 3).diagonal().array() += 2.0 * w[0];
   }
@@ -371,8 +374,9 @@ class RevoluteLimitsTerm final : public Term {
   int dim() const override { return 2; }
   int body_a() const override { return a_.body; }
   int body_b() const override { return b_.body; }
-  void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override {
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
+                Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                Eigen::Ref<Eigen::MatrixXd> J_b) const override {
     Eigen::Matrix<double, 1, 7> da, db;
     const double theta = Angle(poses, a_, b_, &da, &db);
     r[0] = theta - lo_;
@@ -386,7 +390,7 @@ class RevoluteLimitsTerm final : public Term {
   // ω ∇²θ with ω = w_0 − w_1 (the rows are θ − lo and hi − θ). With ρ² = s² + c² and
   // g = ∇θ = (c∇s − s∇c)/ρ²:
   //   ∇²θ = (c∇²s − s∇²c)/ρ² + (∇c∇sᵀ − ∇s∇cᵀ)/ρ² − 2 g (s∇s + c∇c)ᵀ/ρ²   (symmetrized).
-  void AddWeightedHessian(const std::vector<BodyPose>& poses,
+  void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* /*state*/,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override {
     const double omega = w[0] - w[1];

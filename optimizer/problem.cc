@@ -49,4 +49,15 @@ int Problem::AddObjective(TermPtr term, double weight) {
   return Add(&objectives_, &rows_o_, std::move(term), weight);
 }
 
+ProblemData::ProblemData(const Problem& problem) {
+  const std::vector<Problem::Entry>* lists[3] = {&problem.equalities(), &problem.inequalities(),
+                                                 &problem.objectives()};
+  for (size_t k = 0; k < 3; ++k) {
+    for (const Problem::Entry& e : *lists[k]) {
+      states_[k].push_back(e.term->MakeState());
+      if (states_[k].back()) index_.emplace_back(e.term.get(), states_[k].back().get());
+    }
+  }
+}
+
 }  // namespace tangent::optimizer

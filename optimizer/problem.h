@@ -1,7 +1,10 @@
 #pragma once
 
+#include <array>
 #include <memory>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "optimizer/term.h"
@@ -69,6 +72,38 @@ class Problem {
   std::vector<DesignEntry> design_;
   int rows_e_ = 0, rows_i_ = 0, rows_o_ = 0;
   double least_astonishment_ = 1e-3;
+};
+
+/// The per-solve data of a Problem: one TermState per term entry that has one (tracked contact
+/// parameters, goal targets, scratch), made once. The Problem and its terms are not changed by a
+/// solve, so one problem may be solved on several threads at once, each with its own data (each
+/// Solver owns one, through its ProblemEvaluator).
+class ProblemData {
+ public:
+  explicit ProblemData(const Problem& problem);
+  ProblemData(const ProblemData&) = delete;
+  ProblemData& operator=(const ProblemData&) = delete;
+
+  /// The state of entry `index` of a kind (0 equalities, 1 inequalities, 2 objectives), or
+  /// nullptr for a stateless term.
+  TermState* state(int kind, int index) const {
+    return states_[static_cast<size_t>(kind)][static_cast<size_t>(index)].get();
+  }
+  /// The state of `term`, which must be an entry of the problem with a state of type T::State.
+  /// A lookup over the entries: callers on the servo path keep the reference.
+  /// @throws std::invalid_argument naming the term otherwise.
+  template <class T>
+  typename T::State& Of(const T& term) {
+    for (const auto& [t, st] : index_) {
+      if (t != &term) continue;
+      if (auto* typed = dynamic_cast<typename T::State*>(st)) return *typed;
+    }
+    throw std::invalid_argument("problem data: no state for term '" + term.name() + "'");
+  }
+
+ private:
+  std::array<std::vector<std::unique_ptr<TermState>>, 3> states_;
+  std::vector<std::pair<const Term*, TermState*>> index_;
 };
 
 }  // namespace tangent::optimizer

@@ -89,6 +89,9 @@ class Solver {
   SolveStats Solve(Eigen::VectorXd* q);
   /// Forgets multipliers and penalty (after the constraint set or the goals jump).
   void Reset();
+  const SolverOptions& options() const { return options_; }
+  /// Changes the options for the next solves (e.g. a longer budget to settle a scene).
+  void set_options(const SolverOptions& options) { options_ = options; }
   const Eigen::VectorXd& equality_multipliers() const { return lambda_e_; }
   const Eigen::VectorXd& inequality_multipliers() const { return lambda_i_; }
   /// Restores multipliers (e.g. with a saved configuration, after a failed attempt).
@@ -97,6 +100,10 @@ class Solver {
     lambda_i_ = inequality;
   }
   bool sparse() const { return H_.is_sparse(); }
+  /// This solver's per-solve data of the problem: goal targets, tracked contacts (the Problem
+  /// is shared and never changed; several solvers of one problem may run on different threads).
+  ProblemData& data() { return ev_.data(); }
+  const ProblemData& data() const { return ev_.data(); }
 
  private:
   void AugmentedGradient();

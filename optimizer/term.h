@@ -32,6 +32,15 @@ struct TermHessian {
   void Fold(const Eigen::Vector4d& Q_a, const Eigen::Vector4d& Q_b);
 };
 
+/// The per-solve state of a term: whatever changes while a problem is solved (a contact's
+/// tracked parameters and cached evaluation, a goal's target, scratch). A Term itself is
+/// immutable after construction and may be shared by threads; each solve owns the states of
+/// its problem's terms in a ProblemData (problem.h), made once, so evaluation allocates nothing.
+class TermState {
+ public:
+  virtual ~TermState() = default;
+};
+
 /// A smooth vector function r(q) of the poses of at most two bodies, with its Jacobian in two
 /// 7-column blocks (one per body; a fixed body's block is ignored). Joints, limits and goals
 /// are all terms; a Problem decides whether a term is an equality (r = 0), an inequality
@@ -44,15 +53,19 @@ class Term {
   /// Body indices (Mechanism) the term depends on; b may be −1.
   virtual int body_a() const = 0;
   virtual int body_b() const { return -1; }
-  /// r(q) and ∂r/∂q_a, ∂r/∂q_b (dim x 7 each). Allocation free.
-  virtual void Evaluate(const std::vector<BodyPose>& poses, Eigen::Ref<Eigen::VectorXd> r,
-                        Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const = 0;
+  /// A fresh per-solve state, or nullptr for a term without one (its Evaluate ignores `state`).
+  virtual std::unique_ptr<TermState> MakeState() const { return nullptr; }
+  /// r(q) and ∂r/∂q_a, ∂r/∂q_b (dim x 7 each), `state` the term's own (from MakeState; nullptr
+  /// exactly when MakeState returns nullptr). Allocation free.
+  virtual void Evaluate(const std::vector<BodyPose>& poses, TermState* state,
+                        Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                        Eigen::Ref<Eigen::MatrixXd> J_b) const = 0;
 
   /// Adds Σ_i w_i ∇²r_i, the rows' second derivatives weighted by w (dim), to *h. A term that
   /// returns false from has_hessian() adds nothing: its curvature is then missing from the
   /// solver's Newton matrix (Gauss–Newton).
   virtual bool has_hessian() const { return false; }
-  virtual void AddWeightedHessian(const std::vector<BodyPose>& /*poses*/,
+  virtual void AddWeightedHessian(const std::vector<BodyPose>& /*poses*/, TermState* /*state*/,
                                   const Eigen::Ref<const Eigen::VectorXd>& /*w*/,
                                   TermHessian* /*h*/) const {}
 };

@@ -97,12 +97,10 @@ ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene),
     for (int m = 0; m < pair.max_contacts; ++m) {
       auto term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface,
                                                 Eigen::Vector4d::Constant(0.5));
-      term->Deactivate();
-      const int index = p.AddInequality(term);
+      const int index = p.AddInequality(term);  // deactivated below, once solver_ has its data
       slots_.push_back({lo, hi, p.inequalities()[static_cast<size_t>(index)].row, false, term});
     }
   }
-  for (const auto& e : events) Apply(ToEventMsg(e));  // (a cold pass only adds)
 
   // The grasp: a position goal at the grasp point (its weight is the coupling stiffness, in
   // the units where least astonishment has the problem's default weight), and for 6-DOF an
@@ -126,17 +124,31 @@ ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene),
   so.max_iterations = options.max_iterations;
   so.kkt_tolerance = options.kkt_tolerance;
   solver_ = std::make_unique<optimizer::Solver>(p, so);
-  // Settle the initial configuration exactly (contacts at machine precision before the hand).
+  // The per-solve data the tick changes: contact slots (free ones deactivated, then the cold
+  // global pass's contacts), the grasp targets.
+  for (Slot& s : slots_) {
+    s.state = &solver_->data().Of(*s.term);
+    if (!s.floating) s.state->Deactivate();
+  }
+  for (const auto& e : events) Apply(ToEventMsg(e));  // (a cold pass only adds)
+  grasp_state_ = &solver_->data().Of(*grasp_);
+  if (grasp_orientation_) grasp_orientation_state_ = &solver_->data().Of(*grasp_orientation_);
+  // Settle the initial configuration exactly (contacts at machine precision before the hand):
+  // a longer budget, then fresh multipliers for the servo's own options.
   optimizer::SolverOptions settle = so;
   settle.max_iterations = 60;
-  optimizer::Solver(p, settle).Solve(&q_);
+  solver_->set_options(settle);
+  solver_->Solve(&q_);
+  solver_->Reset();
+  solver_->set_options(so);
   solver_->Solve(&q_);
   scene->mechanism.Poses(q_, &poses_);
   if (!scene->device.origin_given) scene->device.origin = GraspPoint();
   target_ = GraspPoint();
-  grasp_->set_target(target_);
+  grasp_state_->target = target_;
   orientation_target_ = Eigen::Quaterniond(poses_[static_cast<size_t>(grasp_at_.body)].R);
-  if (grasp_orientation_) grasp_orientation_->set_target(orientation_target_.toRotationMatrix());
+  if (grasp_orientation_state_)
+    grasp_orientation_state_->R_target = orientation_target_.toRotationMatrix();
   q_good_ = q_;
   lambda_e_good_ = solver_->equality_multipliers();
   lambda_i_good_ = solver_->inequality_multipliers();
@@ -168,13 +180,13 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
   double nearest_d = INFINITY;
   for (Slot& s : slots_) {
     if (s.floating || s.surface_a != lo || s.surface_b != hi) continue;
-    if (!s.term->active()) {
+    if (!s.state->active) {
       if (!free) free = &s;
       continue;
     }
     const double d = ParameterDistance(scene_->surfaces[static_cast<size_t>(lo)].surface,
                                        scene_->surfaces[static_cast<size_t>(hi)].surface,
-                                       s.term->extremum().u, u);
+                                       s.state->extremum().u, u);
     if (d < nearest_d) {
       nearest_d = d;
       nearest = &s;
@@ -185,12 +197,12 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
     // Only the contact the event names: a slot elsewhere on the pair is another contact (the
     // named one may be gone already, e.g. freed by an earlier event).
     if (!nearest || nearest_d > 0.05) return false;
-    nearest->term->Deactivate();
+    nearest->state->Deactivate();
     return true;
   }
   if (nearest && nearest_d < 0.03) return true;  // already tracked (the event raced a snapshot)
   if (!free) return false;
-  free->term->Activate(u);
+  free->state->Activate(u);
   return true;
 }
 
@@ -208,7 +220,7 @@ Eigen::Vector3d ServoLoop::GraspPoint() const {
 
 int ServoLoop::active_contacts() const {
   int n = 0;
-  for (const Slot& s : slots_) n += s.term->active();
+  for (const Slot& s : slots_) n += s.state->active;
   return n;
 }
 
@@ -280,7 +292,7 @@ void ServoLoop::KeepGood() {
   lambda_e_good_ = solver_->equality_multipliers();
   lambda_i_good_ = solver_->inequality_multipliers();
   for (Slot& s : slots_) {
-    if (s.term->active()) s.good_u = s.term->extremum().u;
+    if (s.state->active) s.good_u = s.state->extremum().u;
   }
   target_good_ = target_;
   orientation_target_good_ = orientation_target_;
@@ -290,12 +302,13 @@ void ServoLoop::RestoreGood() {
   q_ = q_good_;
   solver_->set_multipliers(lambda_e_good_, lambda_i_good_);
   for (Slot& s : slots_) {
-    if (s.term->active()) s.term->Reseed(s.good_u);
+    if (s.state->active) s.state->Reseed(s.good_u);
   }
   target_ = target_good_;
   orientation_target_ = orientation_target_good_;
-  grasp_->set_target(target_);
-  if (grasp_orientation_) grasp_orientation_->set_target(orientation_target_.toRotationMatrix());
+  grasp_state_->target = target_;
+  if (grasp_orientation_state_)
+    grasp_orientation_state_->R_target = orientation_target_.toRotationMatrix();
 }
 
 void ServoLoop::StartSession(int64_t session_index) {
@@ -357,8 +370,9 @@ void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out
   if (inject.stage == InjectedFault::kGoal) target_[0] = inject.value;
   optimizer::SolveStats st;
   if (!fault && target_.allFinite() && target_.norm() <= options_.fault_distance) {
-    grasp_->set_target(target_);
-    if (grasp_orientation_) grasp_orientation_->set_target(orientation_target_.toRotationMatrix());
+    grasp_state_->target = target_;
+    if (grasp_orientation_state_)
+      grasp_orientation_state_->R_target = orientation_target_.toRotationMatrix();
     st = solver_->Solve(&q_);
     if (inject.stage == InjectedFault::kSolverResult) q_[0] = inject.value;
     fault = !Sane(st);
@@ -429,7 +443,7 @@ void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out
     if (grasp_orientation_) {
       // τ on the hand = R ¼ G(Q) ∂E/∂Q (the reaction of the body-frame torque −¼ G(Q) ∂E/∂Q
       // that the orientation coupling exerts on the grasped body; seed 001 Eq. 5), device frame.
-      grasp_orientation_->Evaluate(poses_, r9_, J9_, J9b_);
+      grasp_orientation_->Evaluate(poses_, grasp_orientation_state_, r9_, J9_, J9b_);
       const contact::BodyPose& gp = poses_[static_cast<size_t>(grasp_at_.body)];
       const Eigen::Vector4d dE_dQ =
           0.5 * scene_->grasp.rotational_stiffness * J9_.rightCols<4>().transpose() * r9_;
@@ -485,13 +499,13 @@ void ServoLoop::FillSnapshot(Snapshot* s) const {
   int n = 0;
   const Eigen::VectorXd& lambda = solver_->inequality_multipliers();
   for (const Slot& slot : slots_) {
-    if (!slot.term->active() || n >= kMaxContacts) continue;
+    if (!slot.state->active || n >= kMaxContacts) continue;
     TrackedContact& c = s->contacts[n++];
     c.surface_a = slot.surface_a;
     c.surface_b = slot.surface_b;
     c.body_a = scene_->surfaces[static_cast<size_t>(c.surface_a)].body;
     c.body_b = scene_->surfaces[static_cast<size_t>(c.surface_b)].body;
-    const contact::SurfaceSurfaceExtremum& e = slot.term->extremum();
+    const contact::SurfaceSurfaceExtremum& e = slot.state->extremum();
     for (int i = 0; i < 4; ++i) c.u[i] = e.u[i];
     c.beta = e.beta;
     for (int i = 0; i < 3; ++i) {
@@ -503,7 +517,7 @@ void ServoLoop::FillSnapshot(Snapshot* s) const {
                   : 0.0;
   }
   s->num_contacts = n;
-  const Eigen::Vector3d t = grasp_->target();
+  const Eigen::Vector3d t = grasp_state_->target;
   for (int i = 0; i < 3; ++i) s->grasp_target[i] = t[i];
 }
 

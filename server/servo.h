@@ -172,7 +172,8 @@ class ServoLoop {
     int row = 0;                       ///< inequality row (multiplier index)
     bool floating = false;
     std::shared_ptr<optimizer::SurfaceContactTerm> term;
-    Eigen::Vector4d good_u = Eigen::Vector4d::Zero();  ///< tracked parameters, last good tick
+    optimizer::SurfaceContactTerm::State* state = nullptr;  ///< its data in solver_
+    Eigen::Vector4d good_u = Eigen::Vector4d::Zero();       ///< tracked parameters, last good tick
   };
 
   /// Moves the grasp targets toward the device's tool pose, at most the follow speeds times dt.
@@ -194,6 +195,9 @@ class ServoLoop {
   std::unique_ptr<optimizer::Solver> solver_;
   std::shared_ptr<optimizer::PositionGoalTerm> grasp_;
   std::shared_ptr<optimizer::OrientationGoalTerm> grasp_orientation_;
+  // The grasp goals' data in solver_ (their targets).
+  optimizer::PositionGoalTerm::State* grasp_state_ = nullptr;
+  optimizer::OrientationGoalTerm::State* grasp_orientation_state_ = nullptr;
   optimizer::Attachment grasp_at_;
   std::vector<Slot> slots_;
   Eigen::VectorXd q_;

@@ -45,28 +45,36 @@ Eigen::VectorXd NearContact(const Scene& s, double gap, std::mt19937_64& rng) {
   return q;
 }
 
+// The extremum a contact term's state holds.
+const contact::SurfaceSurfaceExtremum& Extremum(const SurfaceContactTerm&, TermState* st) {
+  return static_cast<SurfaceContactTerm::State*>(st)->extremum();
+}
+const contact::PointSurfaceExtremum& Extremum(const PointOnSurfaceTerm&, TermState* st) {
+  return static_cast<PointOnSurfaceTerm::State*>(st)->extremum();
+}
+
 // β and ∇β at q through a term (which tracks from its last parameters).
-double Value(const Mechanism& m, const Term& t, const Eigen::VectorXd& q,
+double Value(const Mechanism& m, const Term& t, TermState* st, const Eigen::VectorXd& q,
              Eigen::Matrix<double, 1, 14>* grad) {
   std::vector<BodyPose> poses;
   m.Poses(q, &poses);
   Eigen::VectorXd r(1);
   Eigen::MatrixXd Ja(1, 7), Jb(1, 7);
-  t.Evaluate(poses, r, Ja, Jb);
+  t.Evaluate(poses, st, r, Ja, Jb);
   if (grad) *grad << Ja, Jb;
   return r[0];
 }
 
-void CheckDerivatives(const Mechanism& m, const Term& t, const Eigen::VectorXd& q, double tol_j,
-                      double tol_h) {
+void CheckDerivatives(const Mechanism& m, const Term& t, TermState* st, const Eigen::VectorXd& q,
+                      double tol_j, double tol_h) {
   Eigen::Matrix<double, 1, 14> g;
-  Value(m, t, q, &g);
+  Value(m, t, st, q, &g);
   std::vector<BodyPose> poses;
   m.Poses(q, &poses);
   const double w = 0.7;
   TermHessian h;
   h.SetZero();
-  t.AddWeightedHessian(poses, Eigen::VectorXd::Constant(1, w), &h);
+  t.AddWeightedHessian(poses, st, Eigen::VectorXd::Constant(1, w), &h);
   h.Fold(q.segment<4>(3), q.segment<4>(10));
   Eigen::Matrix<double, 14, 14> H;
   H << h.aa, h.ab, h.ab.transpose(), h.bb;
@@ -75,12 +83,12 @@ void CheckDerivatives(const Mechanism& m, const Term& t, const Eigen::VectorXd& 
     qp[k] += kH;
     qm[k] -= kH;
     Eigen::Matrix<double, 1, 14> gp, gm;
-    const double fp = Value(m, t, qp, &gp), fm = Value(m, t, qm, &gm);
+    const double fp = Value(m, t, st, qp, &gp), fm = Value(m, t, st, qm, &gm);
     EXPECT_NEAR((fp - fm) / (2 * kH), g[k], tol_j) << t.name() << " coordinate " << k;
     const Eigen::Matrix<double, 1, 14> fd = w * (gp - gm) / (2 * kH);
     EXPECT_LT((fd - H.row(k)).cwiseAbs().maxCoeff(), tol_h) << t.name() << " Hessian row " << k;
   }
-  Value(m, t, q, nullptr);  // Leave the term at q.
+  Value(m, t, st, q, nullptr);  // Leave the term at q.
 }
 
 TEST(ContactTermsTest, SurfaceContactDerivativesMatchFiniteDifferences) {
@@ -95,10 +103,11 @@ TEST(ContactTermsTest, SurfaceContactDerivativesMatchFiniteDifferences) {
           s.a, &s.sphere, s.b, &s.patch,
           contact::ClosestSamplePair(s.sphere, poses[static_cast<size_t>(s.a)], s.patch,
                                      poses[static_cast<size_t>(s.b)], 23));
-      const double beta = Value(s.mech, *term, q, nullptr);
-      ASSERT_EQ(term->extremum().status, contact::ExtremalStatus::kConverged);
+      const std::unique_ptr<TermState> st = term->MakeState();
+      const double beta = Value(s.mech, *term, st.get(), q, nullptr);
+      ASSERT_EQ(Extremum(*term, st.get()).status, contact::ExtremalStatus::kConverged);
       EXPECT_NEAR(beta, gap, 0.015);  // the bump and the offsets move it by millimetres
-      CheckDerivatives(s.mech, *term, q, 1e-8, 2e-6);
+      CheckDerivatives(s.mech, *term, st.get(), q, 1e-8, 2e-6);
     }
   }
 }
@@ -124,12 +133,13 @@ TEST(ContactTermsTest, BoundaryContactDerivativesMatchFiniteDifferences) {
         1.1 * qa.y(), 1.1 * qa.z(), 0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng), 0.95 * qb.w(),
         0.95 * qb.x(), 0.95 * qb.y(), 0.95 * qb.z();
     const auto term = MakeSurfaceContact(a, &square, b, &square, {0.2, 0.2, 0.8, 0.8});
-    const double beta = Value(mech, *term, q, nullptr);
-    const auto& e = term->extremum();
+    const std::unique_ptr<TermState> st = term->MakeState();
+    const double beta = Value(mech, *term, st.get(), q, nullptr);
+    const auto& e = Extremum(*term, st.get());
     ASSERT_EQ(e.status, contact::ExtremalStatus::kAtBoundary);
     ASSERT_TRUE(e.at_bound[0] && e.at_bound[1] && e.at_bound[2] && e.at_bound[3]);
     EXPECT_NEAR(beta, (e.p_f - e.p_g).norm(), 1e-15);
-    CheckDerivatives(mech, *term, q, 1e-8, 2e-6);
+    CheckDerivatives(mech, *term, st.get(), q, 1e-8, 2e-6);
   }
   // Edge against face: a cylinder (radius 0.2) tipped 0.3 rad about x, its lowest rim point
   // 0.1 above g's middle.
@@ -142,10 +152,11 @@ TEST(ContactTermsTest, BoundaryContactDerivativesMatchFiniteDifferences) {
   const auto term =
       MakeSurfaceContact(a, &cylinder, b, &square,
                          contact::ClosestSamplePair(cylinder, poses[0], square, poses[1], 16));
-  const double beta = Value(mech, *term, q, nullptr);
-  ASSERT_EQ(term->extremum().status, contact::ExtremalStatus::kAtBoundary);
+  const std::unique_ptr<TermState> st = term->MakeState();
+  const double beta = Value(mech, *term, st.get(), q, nullptr);
+  ASSERT_EQ(Extremum(*term, st.get()).status, contact::ExtremalStatus::kAtBoundary);
   EXPECT_NEAR(beta, 0.1, 1e-14);
-  CheckDerivatives(mech, *term, q, 1e-8, 2e-6);
+  CheckDerivatives(mech, *term, st.get(), q, 1e-8, 2e-6);
 }
 
 TEST(ContactTermsTest, PointOnSurfaceDerivativesMatchFiniteDifferences) {
@@ -164,9 +175,10 @@ TEST(ContactTermsTest, PointOnSurfaceDerivativesMatchFiniteDifferences) {
       const Eigen::Vector3d low_W = ball.q.head<3>() - 0.05 * n_W;
       const Attachment at{s.a, ball.R.transpose() * (low_W - ball.q.head<3>())};
       const auto term = MakePointOnSurface(at, s.b, &s.patch, {0.5, 0.5});
-      Value(s.mech, *term, q, nullptr);
-      ASSERT_EQ(term->extremum().status, contact::ExtremalStatus::kConverged);
-      CheckDerivatives(s.mech, *term, q, 1e-8, 2e-6);
+      const std::unique_ptr<TermState> st = term->MakeState();
+      Value(s.mech, *term, st.get(), q, nullptr);
+      ASSERT_EQ(Extremum(*term, st.get()).status, contact::ExtremalStatus::kConverged);
+      CheckDerivatives(s.mech, *term, st.get(), q, 1e-8, 2e-6);
     }
   }
 }

@@ -60,24 +60,27 @@ TEST(ReferenceTest, PaperclipChainDraggedKeepsBothContactsExact) {
   Eigen::VectorXd q = cp.chain.mechanism.InitialCoordinates();
   const SolveStats first = solver.Solve(&q);
   ASSERT_TRUE(first.converged) << first.max_violation;
-  EXPECT_LT(std::abs(cp.c01->extremum().beta), 1e-10);
+  EXPECT_LT(std::abs(solver.data().Of(*cp.c01).extremum().beta), 1e-10);
   const Eigen::VectorXd q0 = q;
   double worst = 0.0, clip1_travel = 0.0;
   int total_iter = 0, max_iter = 0, unconverged = 0;
   const long allocations_before = tangent::testing::AllocationCount();
   for (int k = 1; k <= 1000; ++k) {
-    cp.goal->set_target(ClipHand(cp.start, k));
+    SetGoalTarget(solver.data(), *cp.goal, ClipHand(cp.start, k));
     const SolveStats s = solver.Solve(&q);
     worst = std::max(worst, s.max_violation);
     total_iter += s.iterations;
     max_iter = std::max(max_iter, s.iterations);
     unconverged += !s.converged;
-    ASSERT_EQ(cp.c01->extremum().status, contact::ExtremalStatus::kConverged)
-        << "step " << k << " u " << cp.c01->extremum().u.transpose() << " at_bound "
-        << cp.c01->extremum().at_bound[0] << cp.c01->extremum().at_bound[1]
-        << cp.c01->extremum().at_bound[2] << cp.c01->extremum().at_bound[3] << " beta "
-        << cp.c01->extremum().beta;
-    ASSERT_EQ(cp.c12->extremum().status, contact::ExtremalStatus::kConverged) << "step " << k;
+    ASSERT_EQ(solver.data().Of(*cp.c01).extremum().status, contact::ExtremalStatus::kConverged)
+        << "step " << k << " u " << solver.data().Of(*cp.c01).extremum().u.transpose()
+        << " at_bound " << solver.data().Of(*cp.c01).extremum().at_bound[0]
+        << solver.data().Of(*cp.c01).extremum().at_bound[1]
+        << solver.data().Of(*cp.c01).extremum().at_bound[2]
+        << solver.data().Of(*cp.c01).extremum().at_bound[3] << " beta "
+        << solver.data().Of(*cp.c01).extremum().beta;
+    ASSERT_EQ(solver.data().Of(*cp.c12).extremum().status, contact::ExtremalStatus::kConverged)
+        << "step " << k;
     clip1_travel = std::max(clip1_travel, (q.segment<3>(0) - q0.segment<3>(0)).norm());
   }
   const long allocations = tangent::testing::AllocationCount() - allocations_before;
@@ -106,31 +109,32 @@ TEST(ReferenceTest, PaperclipChainWithUnilateralContactsPullsAndReleases) {
   auto drag = [&](double dy_from, double dy_to, int steps) {
     for (int k = 1; k <= steps; ++k) {
       const double dy = dy_from + (dy_to - dy_from) * k / steps;
-      cp.goal->set_target(cp.start + Eigen::Vector3d(0, dy, 0));
+      SetGoalTarget(solver.data(), *cp.goal, cp.start + Eigen::Vector3d(0, dy, 0));
       const SolveStats s = solver.Solve(&q);
       ASSERT_TRUE(s.converged) << "dy " << dy;
       worst = std::max(worst, s.max_violation);
-      ASSERT_GE(cp.c01->extremum().beta, -1e-10);
-      ASSERT_GE(cp.c12->extremum().beta, -1e-10);
+      ASSERT_GE(solver.data().Of(*cp.c01).extremum().beta, -1e-10);
+      ASSERT_GE(solver.data().Of(*cp.c12).extremum().beta, -1e-10);
     }
   };
   drag(0.0, 1 * mm, 100);
   const double lag = 1 * mm - (q[7 + 1] - (cp.start.y() - cp.handle.point.y()));
-  EXPECT_LT(std::abs(cp.c01->extremum().beta), 1e-9);  // both hooks carry the pull
-  EXPECT_LT(std::abs(cp.c12->extremum().beta), 1e-9);
+  EXPECT_LT(std::abs(solver.data().Of(*cp.c01).extremum().beta),
+            1e-9);  // both hooks carry the pull
+  EXPECT_LT(std::abs(solver.data().Of(*cp.c12).extremum().beta), 1e-9);
   const Eigen::VectorXd pulled_multipliers = solver.inequality_multipliers();
   EXPECT_GT(pulled_multipliers.minCoeff(), 0.0);
   EXPECT_LT((q.segment<3>(0) - clip1_start).norm(), 0.2 * mm);
   const Eigen::Vector3d clip1_pulled = q.segment<3>(0);
   drag(1 * mm, -2 * mm, 300);
-  EXPECT_GT(cp.c12->extremum().beta, 0.5 * mm);                  // released
-  EXPECT_LT((q.segment<3>(0) - clip1_pulled).norm(), 0.1 * mm);  // clip 1 left alone
+  EXPECT_GT(solver.data().Of(*cp.c12).extremum().beta, 0.5 * mm);  // released
+  EXPECT_LT((q.segment<3>(0) - clip1_pulled).norm(), 0.1 * mm);    // clip 1 left alone
   const long allocations = tangent::testing::AllocationCount() - allocations_before;
   std::printf(
       "paperclip chain (2 unilateral contacts): pulled 1 mm, clip 2 held back %.3f mm, "
       "contact forces %.2e %.2e N, worst violation %.1e, released gap %.3f mm, allocations %ld\n",
-      lag / mm, pulled_multipliers[0], pulled_multipliers[1], worst, cp.c12->extremum().beta / mm,
-      allocations);
+      lag / mm, pulled_multipliers[0], pulled_multipliers[1], worst,
+      solver.data().Of(*cp.c12).extremum().beta / mm, allocations);
   EXPECT_LE(worst, 1e-10);
   EXPECT_EQ(allocations, 0);
 }
@@ -204,8 +208,9 @@ TEST(ReferenceTest, TwentyTwoDofArmReachesGoalsWithinItsLimits) {
   for (const Eigen::Vector3d& target : targets) {
     arm.mechanism.Poses(q, &poses);
     const Eigen::Vector3d from = poses[static_cast<size_t>(Arm::kLinks)].Point(arm.tip.point);
-    const ModeStats st =
-        SolveForGoal(&solver, &q, [&](double s) { goal->set_target(from + s * (target - from)); });
+    const ModeStats st = SolveForGoal(&solver, &q, [&](double s) {
+      SetGoalTarget(solver.data(), *goal, from + s * (target - from));
+    });
     ASSERT_TRUE(st.reached) << target.transpose() << " reached " << st.reached_fraction;
     total_solves += st.solves;
     total_subdivisions += st.subdivisions;
@@ -232,7 +237,7 @@ TEST(ReferenceTest, TwentyTwoDofArmReachesGoalsWithinItsLimits) {
   }
   EXPECT_LE(worst_angle, 100.0 * std::numbers::pi / 180.0 + 1e-10);
   // A warm servo-style solve on the sparse path allocates nothing.
-  goal->set_target(targets.back() + Eigen::Vector3d(1e-3, 0, 0));
+  SetGoalTarget(solver.data(), *goal, targets.back() + Eigen::Vector3d(1e-3, 0, 0));
   const long before = tangent::testing::AllocationCount();
   const SolveStats warm = solver.Solve(&q);
   const long allocations = tangent::testing::AllocationCount() - before;
@@ -257,7 +262,8 @@ TEST(ReferenceTest, DenseAndSparseNewtonStepsAgree) {
   Solver dense(p, dense_opt), sparse(p, sparse_opt);
   Eigen::VectorXd qd = arm.mechanism.InitialCoordinates(), qs = qd;
   for (int k = 0; k < 20; ++k) {
-    goal->set_target(Eigen::Vector3d(0.2 + 0.01 * k, 0.1, 0.9));
+    SetGoalTarget(dense.data(), *goal, Eigen::Vector3d(0.2 + 0.01 * k, 0.1, 0.9));
+    SetGoalTarget(sparse.data(), *goal, Eigen::Vector3d(0.2 + 0.01 * k, 0.1, 0.9));
     const SolveStats a = dense.Solve(&qd), b = sparse.Solve(&qs);
     EXPECT_EQ(a.iterations, b.iterations);
     ASSERT_LT((qd - qs).cwiseAbs().maxCoeff(), 1e-9) << "solve " << k;

@@ -11,6 +11,8 @@
 #include <cstdio>
 #include <limits>
 #include <numbers>
+#include <thread>
+#include <vector>
 
 #include "nurbs/primitives.h"
 #include "optimizer/contacts.h"
@@ -40,7 +42,7 @@ TEST(SolverTest, FourBarDragKeepsJointsExactOverAThousandWarmSolves) {
   double angle_lo = RevoluteAngle(crank_joint_ground, crank_joint, poses), angle_hi = angle_lo;
   const long allocations_before = tangent::testing::AllocationCount();
   for (int k = 1; k <= 1000; ++k) {
-    goal->set_target(testing::FourBar::PathPoint(k));
+    SetGoalTarget(solver.data(), *goal, testing::FourBar::PathPoint(k));
     const SolveStats s = solver.Solve(&q);
     if (k % 10 == 0) {  // (Poses() reuses the vector's storage: no allocation after the first.)
       fb.mechanism.Poses(q, &poses);
@@ -82,25 +84,27 @@ TEST(SolverTest, FourBarDraggedThroughAFloatingSurfaceContactKeepsItExact) {
   Eigen::VectorXd q = fb.mechanism.InitialCoordinates();
   const SolveStats first = solver.Solve(&q);
   ASSERT_TRUE(first.converged) << "assembly: violation " << first.max_violation << " seed "
-                               << seed.transpose() << " u " << contact->extremum().u.transpose()
-                               << " beta " << contact->extremum().beta << " status "
-                               << contact::ToString(contact->extremum().status);
+                               << seed.transpose() << " u "
+                               << solver.data().Of(*contact).extremum().u.transpose() << " beta "
+                               << solver.data().Of(*contact).extremum().beta << " status "
+                               << contact::ToString(solver.data().Of(*contact).extremum().status);
   double worst = 0.0, worst_beta = 0.0, worst_hand = 0.0;
   int total_iter = 0, max_iter = 0, unconverged = 0;
   const Eigen::Vector3d coupler_start = q.segment<3>(p.mechanism().offset(fb.coupler));
   double coupler_travel = 0.0;
   const long allocations_before = tangent::testing::AllocationCount();
   for (int k = 1; k <= 1000; ++k) {
-    goal->set_target(fb.HandPoint(k));
+    SetGoalTarget(solver.data(), *goal, fb.HandPoint(k));
     const SolveStats s = solver.Solve(&q);
     worst = std::max(worst, s.max_violation);
-    worst_beta = std::max(worst_beta, std::abs(contact->extremum().beta));
+    worst_beta = std::max(worst_beta, std::abs(solver.data().Of(*contact).extremum().beta));
     unconverged += !s.converged;
     total_iter += s.iterations;
     max_iter = std::max(max_iter, s.iterations);
-    ASSERT_EQ(contact->extremum().status, contact::ExtremalStatus::kConverged)
-        << "step " << k << " u " << contact->extremum().u.transpose() << " beta "
-        << contact->extremum().beta << " rcond " << contact->extremum().rcond;
+    ASSERT_EQ(solver.data().Of(*contact).extremum().status, contact::ExtremalStatus::kConverged)
+        << "step " << k << " u " << solver.data().Of(*contact).extremum().u.transpose() << " beta "
+        << solver.data().Of(*contact).extremum().beta << " rcond "
+        << solver.data().Of(*contact).extremum().rcond;
     const Eigen::Vector3d tip = q.segment<3>(p.mechanism().offset(fb.finger));
     worst_hand = std::max(worst_hand, (tip - fb.HandPoint(k)).norm());
     coupler_travel = std::max(
@@ -118,6 +122,57 @@ TEST(SolverTest, FourBarDraggedThroughAFloatingSurfaceContactKeepsItExact) {
   EXPECT_EQ(unconverged, 0);
   EXPECT_EQ(allocations, 0);
   EXPECT_GT(coupler_travel, 0.002);  // the contact drove the mechanism
+}
+
+// Model / Data: the Problem and its terms are shared and never changed by a solve; each solver
+// owns its data (the goal's target, the floating contact's tracked parameters). Four threads
+// drag the same problem along the same path at once, each through its own solver, and get the
+// serial answers bit for bit; a thread on a different path does not disturb them.
+TEST(SolverTest, OneProblemSolvedOnSeveralThreadsAtOnceGivesTheSerialAnswers) {
+  testing::FloatingGraspFourBar fb;
+  std::vector<BodyPose> poses;
+  fb.mechanism.Poses(fb.mechanism.InitialCoordinates(), &poses);
+  const Eigen::Vector4d seed =
+      contact::ClosestSamplePair(fb.tip, poses[static_cast<size_t>(fb.finger)], fb.pad,
+                                 poses[static_cast<size_t>(fb.coupler)], 47);
+  std::shared_ptr<PositionGoalTerm> goal;
+  std::shared_ptr<SurfaceContactTerm> contact;
+  const Problem p = fb.MakeProblem(&goal, &contact, seed);
+  constexpr int kSteps = 300;
+  // One drag along the hand path (reverse: the other direction), from scratch.
+  auto drag = [&](bool reverse) {
+    Solver solver(p);
+    Eigen::VectorXd q = fb.mechanism.InitialCoordinates();
+    std::vector<Eigen::VectorXd> path;
+    std::vector<double> beta;
+    solver.Solve(&q);
+    for (int k = 1; k <= kSteps; ++k) {
+      SetGoalTarget(solver.data(), *goal, fb.HandPoint(reverse ? -k : k));
+      solver.Solve(&q);
+      path.push_back(q);
+      beta.push_back(solver.data().Of(*contact).extremum().beta);
+    }
+    return std::make_pair(path, beta);
+  };
+  const auto serial = drag(false);
+  constexpr int kThreads = 4;
+  std::vector<std::pair<std::vector<Eigen::VectorXd>, std::vector<double>>> results(kThreads);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) threads.emplace_back([&, t] { results[t] = drag(false); });
+  std::thread other([&] { drag(true); });
+  for (std::thread& t : threads) t.join();
+  other.join();
+  for (int t = 0; t < kThreads; ++t) {
+    ASSERT_EQ(results[t].first.size(), serial.first.size());
+    for (int k = 0; k < kSteps; ++k) {
+      ASSERT_EQ((results[t].first[k] - serial.first[k]).cwiseAbs().maxCoeff(), 0.0)
+          << "thread " << t << " step " << k;
+      ASSERT_EQ(results[t].second[k], serial.second[k]) << "thread " << t << " step " << k;
+    }
+  }
+  // The problem's own goal is untouched: a new solver starts from the constructed target.
+  Solver fresh(p);
+  EXPECT_EQ(fresh.data().Of(*goal).target, goal->initial_target());
 }
 
 TEST(SolverTest, SolveForGoalSubdividesALargeMoveAndPullToGoalFollowsTheLine) {
@@ -138,19 +193,20 @@ TEST(SolverTest, SolveForGoalSubdividesALargeMoveAndPullToGoalFollowsTheLine) {
   const Eigen::VectorXd q0 = q;
   {
     Eigen::VectorXd direct = q0;
-    goal->set_target(to);
+    SetGoalTarget(solver.data(), *goal, to);
     EXPECT_FALSE(solver.Solve(&direct).converged);  // one solve is not enough
   }
   Solver fresh(p, opt);
-  const ModeStats st =
-      SolveForGoal(&fresh, &q, [&](double s) { goal->set_target(from + s * (to - from)); });
+  const ModeStats st = SolveForGoal(
+      &fresh, &q, [&](double s) { SetGoalTarget(fresh.data(), *goal, from + s * (to - from)); });
   EXPECT_TRUE(st.reached);
   EXPECT_GT(st.subdivisions, 0);
   EXPECT_LE(st.last.max_violation, 1e-10);
   Solver puller(p, opt);
   Eigen::VectorXd q_pull = q0;
   const ModeStats pull = PullToGoal(
-      &puller, &q_pull, [&](double s) { goal->set_target(from + s * (to - from)); }, 20);
+      &puller, &q_pull,
+      [&](double s) { SetGoalTarget(puller.data(), *goal, from + s * (to - from)); }, 20);
   EXPECT_TRUE(pull.reached);
   EXPECT_EQ(pull.solves, 20);
   // Both end at the configuration nearest the target along the coupler curve, once least
@@ -200,7 +256,7 @@ TEST(SolverTest, ReducedHessianTellsMinimaFromSaddles) {
   Solver solver(p, opt);
   Eigen::VectorXd q = fb.mechanism.InitialCoordinates();
   for (int k = 0; k <= 50; k += 10) {
-    goal->set_target(testing::FourBar::PathPoint(k));
+    SetGoalTarget(solver.data(), *goal, testing::FourBar::PathPoint(k));
     const SolveStats s = solver.Solve(&q);
     EXPECT_TRUE(s.reduced_hessian_positive_definite)
         << k << " " << s.reduced_hessian_min_eigenvalue;
@@ -220,7 +276,8 @@ TEST(SolverTest, ABudgetReturnsTheBestIterateWithItsOwnStatistics) {
     opt.max_iterations = budget;
     Solver solver(p, opt);
     Eigen::VectorXd qb = q;
-    goal->set_target(testing::FourBar::PathPoint(0) + Eigen::Vector3d(0.04, 0, -0.01));
+    SetGoalTarget(solver.data(), *goal,
+                  testing::FourBar::PathPoint(0) + Eigen::Vector3d(0.04, 0, -0.01));
     const SolveStats s = solver.Solve(&qb);
     EXPECT_FALSE(s.converged);
     ASSERT_TRUE(qb.allFinite());
@@ -243,10 +300,11 @@ TEST(SolverTest, WarmSolveReachesTheColdOptimum) {
   Eigen::VectorXd q = fb.mechanism.InitialCoordinates();
   warm.Solve(&q);
   for (int k = 1; k <= 120; ++k) {
-    goal->set_target(testing::FourBar::PathPoint(k));
+    SetGoalTarget(warm.data(), *goal, testing::FourBar::PathPoint(k));
     warm.Solve(&q);
   }
   Solver cold(p, opt);
+  SetGoalTarget(cold.data(), *goal, testing::FourBar::PathPoint(120));
   Eigen::VectorXd q_cold = fb.mechanism.InitialCoordinates();
   const SolveStats s = cold.Solve(&q_cold);
   ASSERT_TRUE(s.converged);
@@ -303,7 +361,7 @@ TEST(SolverTest, JointLimitsHoldAsInequalities) {
   s.Solve(&q);
   std::vector<BodyPose> poses;
   for (int k = 1; k <= 300; ++k) {
-    goal->set_target(testing::FourBar::PathPoint(k));
+    SetGoalTarget(s.data(), *goal, testing::FourBar::PathPoint(k));
     const SolveStats st = s.Solve(&q);
     EXPECT_LE(st.max_violation, 1e-10) << k;
     fb.mechanism.Poses(q, &poses);
@@ -345,7 +403,7 @@ TEST(SolverTest, ALoadedContactOnACurvedSurfaceStaysActiveWhileDragged) {
     constexpr int kSteps = 400;
     for (int k = 1; k <= kSteps; ++k) {  // 0.02 rad (0.2 mm along the surface) per step
       const double a = 0.02 * k;
-      goal->set_target(0.6 * radius * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0));
+      SetGoalTarget(s.data(), *goal, 0.6 * radius * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0));
       const SolveStats st = s.Solve(&q);
       iterations += st.iterations;
       *budget_hits += !st.converged;
@@ -404,7 +462,7 @@ TEST(SolverTest, NonFiniteInputIsRejectedAndNeverPoisonsTheNextSolve) {
   // valid solves as fast as before.
   for (double bad_target : {std::numeric_limits<double>::quiet_NaN(),
                             std::numeric_limits<double>::infinity(), -1e308 * 10}) {
-    goal->set_target(Eigen::Vector3d(0.1, bad_target, 0.0));
+    SetGoalTarget(solver.data(), *goal, Eigen::Vector3d(0.1, bad_target, 0.0));
     Eigen::VectorXd x = good;
     const SolveStats s = solver.Solve(&x);
     EXPECT_FALSE(s.converged);
@@ -412,13 +470,13 @@ TEST(SolverTest, NonFiniteInputIsRejectedAndNeverPoisonsTheNextSolve) {
     EXPECT_EQ(x, good);
     EXPECT_TRUE(solver.equality_multipliers().allFinite());
     EXPECT_TRUE(solver.inequality_multipliers().allFinite());
-    goal->set_target(testing::FourBar::PathPoint(1));
+    SetGoalTarget(solver.data(), *goal, testing::FourBar::PathPoint(1));
     const SolveStats next = solver.Solve(&x);
     EXPECT_TRUE(next.converged);
     EXPECT_LE(next.iterations, 6);
     EXPECT_TRUE(x.allFinite());
     x = good;
-    goal->set_target(testing::FourBar::PathPoint(0));
+    SetGoalTarget(solver.data(), *goal, testing::FourBar::PathPoint(0));
     ASSERT_TRUE(solver.Solve(&x).converged);
   }
 }

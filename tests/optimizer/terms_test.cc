@@ -53,6 +53,18 @@ void ForEachCoordinate(const Fixture& f, const Term& term, const Eigen::VectorXd
   }
 }
 
+// Evaluations with the term's own fresh per-solve state (goal targets as constructed).
+void Eval(const Term& t, const std::vector<BodyPose>& poses, Eigen::VectorXd& r,
+          Eigen::MatrixXd& J_a, Eigen::MatrixXd& J_b) {
+  const std::unique_ptr<TermState> st = t.MakeState();
+  t.Evaluate(poses, st.get(), r, J_a, J_b);
+}
+void AddHessian(const Term& t, const std::vector<BodyPose>& poses, const Eigen::VectorXd& w,
+                TermHessian* h) {
+  const std::unique_ptr<TermState> st = t.MakeState();
+  t.AddWeightedHessian(poses, st.get(), w, h);
+}
+
 void CheckTermAt(const Fixture& f, const Term& term, const Eigen::VectorXd& q) {
   {
     std::vector<BodyPose> poses;
@@ -60,7 +72,7 @@ void CheckTermAt(const Fixture& f, const Term& term, const Eigen::VectorXd& q) {
     const int m = term.dim();
     Eigen::VectorXd r(m);
     Eigen::MatrixXd Ja(m, 7), Jb(m, 7);
-    term.Evaluate(poses, r, Ja, Jb);
+    Eval(term, poses, r, Ja, Jb);
     ASSERT_TRUE(r.allFinite()) << term.name();
     ForEachCoordinate(f, term, q,
                       [&](int side, int k, const Eigen::VectorXd& qp, const Eigen::VectorXd& qm) {
@@ -69,8 +81,8 @@ void CheckTermAt(const Fixture& f, const Term& term, const Eigen::VectorXd& q) {
                         f.mech.Poses(qm, &pm);
                         Eigen::VectorXd rp(m), rm(m);
                         Eigen::MatrixXd s1(m, 7), s2(m, 7);
-                        term.Evaluate(pp, rp, s1, s2);
-                        term.Evaluate(pm, rm, s1, s2);
+                        Eval(term, pp, rp, s1, s2);
+                        Eval(term, pm, rm, s1, s2);
                         const Eigen::VectorXd fd = (rp - rm) / (2 * kH);
                         const Eigen::VectorXd an = side == 0 ? Ja.col(k) : Jb.col(k);
                         EXPECT_LT((fd - an).cwiseAbs().maxCoeff(), kTol)
@@ -98,7 +110,7 @@ void CheckHessianAt(const Fixture& f, const Term& term, const Eigen::VectorXd& q
     f.mech.Poses(q, &poses);
     TermHessian h;
     h.SetZero();
-    term.AddWeightedHessian(poses, w, &h);
+    AddHessian(term, poses, w, &h);
     const int b = term.body_b() >= 0 ? term.body_b() : term.body_a();
     h.Fold(poses[static_cast<size_t>(term.body_a())].q.tail<4>(),
            poses[static_cast<size_t>(b)].q.tail<4>());
@@ -109,7 +121,7 @@ void CheckHessianAt(const Fixture& f, const Term& term, const Eigen::VectorXd& q
       f.mech.Poses(x, &p);
       Eigen::VectorXd r(m);
       Eigen::MatrixXd Ja(m, 7), Jb(m, 7);
-      term.Evaluate(p, r, Ja, Jb);
+      Eval(term, p, r, Ja, Jb);
       *ga = Ja.transpose() * w;
       *gb = Jb.transpose() * w;
     };
@@ -192,7 +204,7 @@ TEST(TermsTest, JointsVanishWhenAssembled) {
                            PrismaticJoint(a, b), FixedJoint(a, b)}) {
     Eigen::VectorXd r(t->dim());
     Eigen::MatrixXd J1(t->dim(), 7), J2(t->dim(), 7);
-    t->Evaluate(poses, r, J1, J2);
+    Eval(*t, poses, r, J1, J2);
     EXPECT_LT(r.cwiseAbs().maxCoeff(), 1e-15) << t->name();
   }
 }
@@ -219,7 +231,7 @@ TEST(TermsTest, FlippedMountingsAreNotSolutions) {
     f.mech.Poses(q, &poses);
     Eigen::VectorXd r(t.dim());
     Eigen::MatrixXd J1(t.dim(), 7), J2(t.dim(), 7);
-    t.Evaluate(poses, r, J1, J2);
+    Eval(t, poses, r, J1, J2);
     return r.norm();
   };
   const double pi = std::numbers::pi;
