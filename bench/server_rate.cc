@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
   EngineOptions eo;
   eo.rate_hz = rate;
   eo.spin_for_device = spin_for_device;
-  Engine engine(scene.get(), eo);
+  Engine engine(*scene, eo);
   std::printf(
       "server_rate: paperclips, %d contacts at rest, servo %.0f Hz on core %d, global stage "
       "on core %d, %.0f s\n",

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "bench/drag_path.h"
+#include "server/global_link.h"
 #include "server/servo.h"
 
 using namespace tangent::server;
@@ -33,12 +34,8 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--lag")) lag = std::atoi(argv[i + 1]);
   }
   auto scene = LoadScene(std::string(TANGENT_SCENES_DIR) + "/paperclips.json");
-  ServoLoop servo(scene.get(), so);
-  tangent::contact::GlobalContactStage stage(servo.GlobalSurfaces(), servo.GlobalPairs(),
-                                             tangent::contact::GlobalOptions{});
-  std::vector<tangent::contact::BodyPose> poses;
-  std::vector<tangent::contact::GlobalContact> tracked;
-  std::vector<tangent::contact::ContactEvent> events;
+  ServoLoop servo(*scene, so);
+  GlobalLink link(servo);
   Snapshot snap;
   TickResult r;
   int64_t now = 1'000'000'000, seq = 0;
@@ -77,11 +74,7 @@ int main(int argc, char** argv) {
     }
     // The global pass on this snapshot; its events reach the servo `lag` device steps later
     // (the threaded server's pass runs beside the servo and lags it by up to a millisecond).
-    ServoLoop::ToGlobalInput(snap, &poses, &tracked);
-    stage.Run(poses, tracked, &events);
-    for (const tangent::contact::ContactEvent& e : events) {
-      pending.push_back({k + lag, ServoLoop::ToEventMsg(e)});
-    }
+    link.Pass(snap, [&](const ContactEventMsg& m) { pending.push_back({k + lag, m}); });
     while (!pending.empty() && pending.front().first <= k) {
       const ContactEventMsg& m = pending.front().second;
       events_applied += servo.Apply(m);

@@ -13,6 +13,8 @@
 #include <ctime>
 #include <vector>
 
+#include "server/global_link.h"
+
 namespace tangent::server {
 
 int64_t MonotonicNs() {
@@ -103,7 +105,7 @@ uint64_t DurationHistogram::Total(const uint64_t* counts) {
   return t;
 }
 
-Engine::Engine(Scene* scene, const EngineOptions& options) : options_(options) {
+Engine::Engine(const Scene& scene, const EngineOptions& options) : options_(options) {
   servo_ = std::make_unique<ServoLoop>(scene, options.servo);
   Snapshot s;
   servo_->FillSnapshot(&s);
@@ -306,11 +308,7 @@ void Engine::ServoThread() {
 void Engine::GlobalThread() {
   prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
   PinToCore(options_.global_cpu);
-  contact::GlobalContactStage stage(servo_->GlobalSurfaces(), servo_->GlobalPairs(),
-                                    contact::GlobalOptions{});
-  std::vector<contact::BodyPose> poses;
-  std::vector<contact::GlobalContact> tracked;
-  std::vector<contact::ContactEvent> events;
+  GlobalLink link(*servo_);
   Snapshot snap;
   const int64_t period = static_cast<int64_t>(1e9 / options_.global_rate_hz);
   int64_t next = MonotonicNs();
@@ -323,11 +321,9 @@ void Engine::GlobalThread() {
     if (v != last_version && snap.events_taken >= events_pushed_.load()) {
       last_version = v;
       const int64_t t0 = MonotonicNs();
-      ServoLoop::ToGlobalInput(snap, &poses, &tracked);
-      stage.Run(poses, tracked, &events);
-      for (const contact::ContactEvent& e : events) {
-        if (events_.Push(ServoLoop::ToEventMsg(e))) events_pushed_.fetch_add(1);
-      }
+      link.Pass(snap, [&](const ContactEventMsg& m) {
+        if (events_.Push(m)) events_pushed_.fetch_add(1);
+      });
       global_.Add(1e-3 * static_cast<double>(MonotonicNs() - t0));
       global_passes_.fetch_add(1, std::memory_order_relaxed);
     }

@@ -113,7 +113,7 @@ void FormatJournalEntry(const JournalEntry& j, int64_t start_ns, char* out, size
 
 class Engine {
  public:
-  Engine(Scene* scene, const EngineOptions& options);
+  Engine(const Scene& scene, const EngineOptions& options);
   ~Engine();
   Engine(const Engine&) = delete;
   Engine& operator=(const Engine&) = delete;

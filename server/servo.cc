@@ -32,7 +32,9 @@ double ParameterDistance(const nurbs::NurbsSurface& a, const nurbs::NurbsSurface
 
 }  // namespace
 
-ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene), options_(options) {
+ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
+    : scene_(&scene_in), options_(options) {
+  const Scene* scene = scene_;
   if (options.dof != 3 && options.dof != 6) {
     throw SceneError("device: dof must be 3 or 6, got " + std::to_string(options.dof));
   }
@@ -143,7 +145,7 @@ ServoLoop::ServoLoop(Scene* scene, const ServoOptions& options) : scene_(scene),
   solver_->set_options(so);
   solver_->Solve(&q_);
   scene->mechanism.Poses(q_, &poses_);
-  if (!scene->device.origin_given) scene->device.origin = GraspPoint();
+  device_origin_ = scene->device.origin_given ? scene->device.origin : GraspPoint();
   target_ = GraspPoint();
   grasp_state_->target = target_;
   orientation_target_ = Eigen::Quaterniond(poses_[static_cast<size_t>(grasp_at_.body)].R);
@@ -211,7 +213,7 @@ Eigen::Vector3d ServoLoop::ToolPoint(const DeviceSample& d) const {
   const Eigen::Quaterniond Q(d.orientation[0], d.orientation[1], d.orientation[2],
                              d.orientation[3]);
   const Eigen::Vector3d p(d.position[0], d.position[1], d.position[2]);
-  return dv.origin + dv.scale * dv.rotation * (p + Q * dv.tool_offset);
+  return device_origin_ + dv.scale * dv.rotation * (p + Q * dv.tool_offset);
 }
 
 Eigen::Vector3d ServoLoop::GraspPoint() const {
@@ -519,37 +521,6 @@ void ServoLoop::FillSnapshot(Snapshot* s) const {
   s->num_contacts = n;
   const Eigen::Vector3d t = grasp_state_->target;
   for (int i = 0; i < 3; ++i) s->grasp_target[i] = t[i];
-}
-
-ContactEventMsg ServoLoop::ToEventMsg(const contact::ContactEvent& e) {
-  ContactEventMsg m;
-  m.added = e.kind == contact::ContactEvent::Kind::kAdded ? 1 : 0;
-  m.surface_a = e.contact.a;
-  m.surface_b = e.contact.b;
-  for (int i = 0; i < 4; ++i) m.u[i] = e.contact.u[i];
-  return m;
-}
-
-void ServoLoop::ToGlobalInput(const Snapshot& s, std::vector<contact::BodyPose>* poses,
-                              std::vector<contact::GlobalContact>* tracked) {
-  poses->resize(static_cast<size_t>(s.num_bodies));
-  for (int b = 0; b < s.num_bodies; ++b) {
-    contact::Vector7d coordinates;
-    for (int i = 0; i < 7; ++i) coordinates[i] = s.q[b][i];
-    (*poses)[static_cast<size_t>(b)] = contact::BodyPose::FromCoordinates(coordinates);
-  }
-  tracked->clear();
-  for (int k = 0; k < s.num_contacts; ++k) {
-    const TrackedContact& c = s.contacts[k];
-    contact::GlobalContact g;
-    g.a = c.surface_a;
-    g.b = c.surface_b;
-    g.u = Eigen::Vector4d(c.u[0], c.u[1], c.u[2], c.u[3]);
-    g.beta = c.beta;
-    g.p_a = Eigen::Vector3d(c.p_a[0], c.p_a[1], c.p_a[2]);
-    g.p_b = Eigen::Vector3d(c.p_b[0], c.p_b[1], c.p_b[2]);
-    tracked->push_back(g);
-  }
 }
 
 }  // namespace tangent::server

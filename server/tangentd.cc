@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
       std::printf("load: %s\n", line.c_str());
       if (log) std::fprintf(log, "load: %s\n", line.c_str());
     }
-    Engine engine(scene.get(), eo);
+    Engine engine(*scene, eo);
     Bridge bridge(&engine, url, ch, log, status, bo);
     std::printf(
         "tangentd: scene \"%s\": %d bodies, %zu surfaces, %zu contact pairs, %d contacts "

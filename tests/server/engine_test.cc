@@ -17,7 +17,7 @@ TEST(EngineTest, ADeviceStateWakesTheSleepingServoAndIsAnsweredOnce) {
   EngineOptions o;
   o.rate_hz = 1.0;  // one scheduled tick a second: an answer within the second is the doorbell's
   o.servo_cpu = o.global_cpu = -1;
-  Engine engine(scene.get(), o);
+  Engine engine(*scene, o);
   engine.Start();
   // The first scheduled tick is a second after Start: the servo sleeps now.
   WrenchSample w;

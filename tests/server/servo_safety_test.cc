@@ -42,7 +42,7 @@ struct Rig {
   int faults = 0, non_finite = 0, answers = 0;
 
   explicit Rig(const std::string& name) : scene(Load(name)) {
-    servo = std::make_unique<ServoLoop>(scene.get(), ServoOptions{});
+    servo = std::make_unique<ServoLoop>(*scene, ServoOptions{});
   }
 
   DeviceSample State(const Eigen::Vector3d& p) {

@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include "bench/drag_path.h"
+#include "server/global_link.h"
 #include "tests/support/alloc_counter.h"
 
 namespace tangent::server {
@@ -36,13 +37,9 @@ DeviceSample Sample(int64_t seq, const Eigen::Vector3d& p, int64_t now_ns) {
 
 TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
   auto scene = Load("paperclips");
-  ServoLoop servo(scene.get(), ServoOptions{});
+  ServoLoop servo(*scene, ServoOptions{});
   EXPECT_EQ(servo.active_contacts(), 2);  // both hooks, found by the global stage at load
-  contact::GlobalContactStage stage(servo.GlobalSurfaces(), servo.GlobalPairs(),
-                                    contact::GlobalOptions{});
-  std::vector<contact::BodyPose> poses;
-  std::vector<contact::GlobalContact> tracked;
-  std::vector<contact::ContactEvent> events;
+  GlobalLink link(servo);
   Snapshot snap;
   TickResult r;
   int64_t now = 1'000'000'000;
@@ -80,14 +77,11 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
       }
     }
     servo.FillSnapshot(&snap);
-    ServoLoop::ToGlobalInput(snap, &poses, &tracked);
-    stage.Run(poses, tracked, &events);
-    for (const contact::ContactEvent& e : events) {
-      const ContactEventMsg m = ServoLoop::ToEventMsg(e);
+    link.Pass(snap, [&](const ContactEventMsg& m) {
       const long before = tangent::testing::AllocationCount();
       events_applied += servo.Apply(m);
       allocations += tangent::testing::AllocationCount() - before;
-    }
+    });
   }
   std::printf(
       "paperclip servo: rest violation %.1e, drag worst violation %.1e, force when lifted %.2f N, "
@@ -109,7 +103,7 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
 
 TEST(ServoTest, ARemovalFreesOnlyTheContactItNames) {
   auto scene = Load("paperclips");
-  ServoLoop servo(scene.get(), ServoOptions{});
+  ServoLoop servo(*scene, ServoOptions{});
   ASSERT_EQ(servo.active_contacts(), 2);
   Snapshot snap;
   servo.FillSnapshot(&snap);
@@ -131,7 +125,7 @@ TEST(ServoTest, ARemovalFreesOnlyTheContactItNames) {
 
 TEST(ServoTest, DeviceTimeoutRampsTheForceToZeroAndHoldsTheScene) {
   auto scene = Load("paperclips");
-  ServoLoop servo(scene.get(), ServoOptions{});
+  ServoLoop servo(*scene, ServoOptions{});
   TickResult r;
   int64_t now = 1'000'000'000;
   DeviceSample s;
@@ -183,7 +177,7 @@ TEST(ServoTest, SixDofTorqueRestoresTheStylusTowardThePart) {
   auto scene = Load("fourbar_point");
   ServoOptions o;
   o.dof = 6;
-  ServoLoop servo(scene.get(), o);
+  ServoLoop servo(*scene, o);
   TickResult r;
   int64_t now = 1'000'000'000;
   const double theta = 0.1;
@@ -208,7 +202,7 @@ TEST(ServoTest, SixDofTorqueRestoresTheStylusTowardThePart) {
   EXPECT_LE(std::abs(r.wrench.torque[0]), 1.05 * scene->grasp.rotational_stiffness * theta);
   // 3-DOF mode sends no torque.
   auto scene3 = Load("fourbar_point");
-  ServoLoop servo3(scene3.get(), ServoOptions{});
+  ServoLoop servo3(*scene3, ServoOptions{});
   DeviceSample s = Sample(1, Eigen::Vector3d::Zero(), now);
   servo3.Tick(&s, now, &r);
   EXPECT_EQ(r.wrench.torque[0], 0.0);
@@ -216,7 +210,7 @@ TEST(ServoTest, SixDofTorqueRestoresTheStylusTowardThePart) {
 
 TEST(ServoTest, FloatingGraspKeepsTheFingerOnThePad) {
   auto scene = Load("fourbar_floating");
-  ServoLoop servo(scene.get(), ServoOptions{});
+  ServoLoop servo(*scene, ServoOptions{});
   TickResult r;
   int64_t now = 1'000'000'000;
   double worst = 0.0;
@@ -237,7 +231,7 @@ TEST(ServoTest, BadOptionsAreRejected) {
   ServoOptions o;
   o.dof = 4;
   try {
-    ServoLoop servo(scene.get(), o);
+    ServoLoop servo(*scene, o);
     FAIL() << "dof 4 accepted";
   } catch (const SceneError& e) {
     EXPECT_NE(std::string(e.what()).find("dof must be 3 or 6, got 4"), std::string::npos);
