@@ -21,7 +21,7 @@
 #include "bench/median_reporter.h"
 #include "contact/global.h"
 #include "nurbs/primitives.h"
-#include "tests/contact/paperclip_chain.h"
+#include "testing/paperclip_chain.h"
 
 namespace tangent::contact {
 namespace {

@@ -20,8 +20,8 @@
 
 #include "bench/median_reporter.h"
 #include "nurbs/refinement.h"
-#include "tests/nurbs/occt_convert.h"
-#include "tests/nurbs/random_nurbs.h"
+#include "testing/occt_convert.h"
+#include "testing/random_nurbs.h"
 
 namespace tangent::nurbs {
 namespace {

@@ -1,5 +1,5 @@
 // Four-bar warm solves (seed 001 Fig. 7, the grasp dragged along the path of
-// tests/optimizer/fourbar.h) by our augmented-Lagrangian solver, IPOPT and NLopt SLSQP on the
+// testing/fourbar.h) by our augmented-Lagrangian solver, IPOPT and NLopt SLSQP on the
 // identical problem: same objective (least astonishment + grasp), same equality constraints
 // (joints and unit quaternions), same starting point at every step (our previous solution).
 // IPOPT gets the exact Lagrangian Hessian from the same term Hessians; SLSQP its own BFGS.
@@ -24,7 +24,7 @@
 
 #include "optimizer/evaluator.h"
 #include "optimizer/solver.h"
-#include "tests/optimizer/fourbar.h"
+#include "testing/fourbar.h"
 
 namespace tangent::optimizer {
 namespace {

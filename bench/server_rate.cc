@@ -18,9 +18,9 @@
 #include <string>
 #include <vector>
 
-#include "bench/drag_path.h"
 #include "server/engine.h"
 #include "server/scene.h"
+#include "testing/drag_path.h"
 
 using namespace tangent::server;
 

@@ -1,5 +1,5 @@
 // The servo tick's compute on one thread, without scheduling noise (issue 6): the paperclip
-// scene dragged along bench/drag_path.h (lift 6 mm over 2 s, then 4 mm circles), a device
+// scene dragged along testing/drag_path.h (lift 6 mm over 2 s, then 4 mm circles), a device
 // state every millisecond, four ticks per state, one global pass after every four ticks, its
 // events applied between ticks. Reports the tick time distribution, the solver's iteration
 // histogram, ticks at the iteration budget, the worst violation and complementarity (the largest
@@ -18,9 +18,9 @@
 #include <string>
 #include <vector>
 
-#include "bench/drag_path.h"
 #include "server/global_link.h"
 #include "server/servo.h"
+#include "testing/drag_path.h"
 
 using namespace tangent::server;
 

@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "nurbs/basis.h"
-#include "nurbs/refinement.h"
+#include "nurbs/bezier_nets.h"
 
 namespace tangent::nurbs {
 
@@ -83,7 +83,7 @@ NurbsCurve<Dim> NurbsCurve<Dim>::FromHomogeneous(KnotVector knots,
 
 template <int Dim>
 void NurbsCurve<Dim>::Finish() {
-  fast_ = internal::BuildSpanForm(*this);
+  fast_ = internal::BuildSpanForm<Dim>(knots_, cpw_);
 }
 
 template <int Dim>

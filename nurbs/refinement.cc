@@ -6,35 +6,16 @@
 #include <stdexcept>
 
 #include "nurbs/basis.h"
+#include "nurbs/bezier_nets.h"
 
 namespace tangent::nurbs {
 
 namespace {
 
-using AlphaRow = std::array<double, kMaxDegree + 1>;
-
-// Bezier net of the a-th derivative of the piece on span mu over [t_mu, t_mu+1]: point i is
-// p!/(p−a)! · b(t_mu^{p−a−i}, t_mu+1^i, δ^a); a = 0 gives the span's Bezier net, i = 0..p−a.
-void DerivativeBezierRows(const KnotVector& k, int mu, int a, AlphaRow* rows) {
-  const int p = k.degree();
-  double factor = 1.0;
-  for (int r = 0; r < a; ++r) factor *= p - r;
-  double x[kMaxDegree];
-  for (int i = 0; i <= p - a; ++i) {
-    for (int r = 0; r < p; ++r) x[r] = r < p - a - i ? k[mu] : k[mu + 1];
-    OsloAlphaRow(k, mu, x, &rows[i], a);
-    for (int j = 0; j <= p; ++j) rows[i][static_cast<size_t>(j)] *= factor;
-  }
-}
-
-// Non-empty spans of the domain, as old-knot indices mu.
-std::vector<int> DomainSpans(const KnotVector& k) {
-  std::vector<int> spans;
-  for (int mu = k.degree(); mu < k.num_basis(); ++mu) {
-    if (k[mu] < k[mu + 1]) spans.push_back(mu);
-  }
-  return spans;
-}
+using internal::AlphaRow;
+using internal::CurveBezierNet;
+using internal::DerivativeBezierRows;
+using internal::DomainSpans;
 
 std::vector<double> ClampedBezierKnots(int p, double a, double b) {
   std::vector<double> knots(static_cast<size_t>(2 * (p + 1)), a);
@@ -256,49 +237,7 @@ NurbsSurface InsertKnot(const NurbsSurface& surface, Direction dir, double t, in
                                        in_u ? surface.knots_v() : refined, std::move(cpw));
 }
 
-namespace {
-
-// Bezier net of the order-d derivative of the curve's piece on span mu (d = 0: the piece
-// itself): point a = Σ_k alpha_a[k] P_{mu-p+k}, a = 0..p−d.
-template <class HPoint>
-void CurveBezierNet(const KnotVector& k, const std::vector<HPoint>& pw, int mu, int d,
-                    HPoint* net) {
-  const int p = k.degree();
-  AlphaRow rows[kMaxDegree + 1];
-  DerivativeBezierRows(k, mu, d, rows);
-  for (int a = 0; a <= p - d; ++a) {
-    net[a].setZero();
-    for (int i = 0; i <= p; ++i) {
-      net[a] += rows[a][static_cast<size_t>(i)] * pw[static_cast<size_t>(mu - p + i)];
-    }
-  }
-}
-
-// Bezier net of ∂^{du+dv}A/∂u^du ∂v^dv on surface span (mu_u, mu_v) ((0, 0): the patch
-// itself), (p+1−du) x (q+1−dv) points row-major in u, each multiplied by `scale`.
-void SurfaceBezierNet(const NurbsSurface& s, int mu_u, int mu_v, int du, int dv, double scale,
-                      Eigen::Vector4d* net) {
-  const int p = s.degree_u();
-  const int q = s.degree_v();
-  AlphaRow ru[kMaxDegree + 1], rv[kMaxDegree + 1];
-  DerivativeBezierRows(s.knots_u(), mu_u, du, ru);
-  DerivativeBezierRows(s.knots_v(), mu_v, dv, rv);
-  for (int a = 0; a <= p - du; ++a) {
-    for (int b = 0; b <= q - dv; ++b) {
-      Eigen::Vector4d acc = Eigen::Vector4d::Zero();
-      for (int i = 0; i <= p; ++i) {
-        Eigen::Vector4d row = Eigen::Vector4d::Zero();
-        for (int j = 0; j <= q; ++j) {
-          row += rv[b][static_cast<size_t>(j)] * s.weighted_point(mu_u - p + i, mu_v - q + j);
-        }
-        acc += ru[a][static_cast<size_t>(i)] * row;
-      }
-      net[a * (q + 1 - dv) + b] = scale * acc;
-    }
-  }
-}
-
-}  // namespace
+namespace {}  // namespace
 
 template <int Dim>
 std::vector<NurbsCurve<Dim>> ExtractBezier(const NurbsCurve<Dim>& curve) {
@@ -324,7 +263,8 @@ std::vector<NurbsSurface> ExtractBezier(const NurbsSurface& surface) {
   for (int mu_u : DomainSpans(ku)) {
     for (int mu_v : DomainSpans(kv)) {
       std::vector<Eigen::Vector4d> net(static_cast<size_t>((p + 1) * (q + 1)));
-      SurfaceBezierNet(surface, mu_u, mu_v, 0, 0, 1.0, net.data());
+      internal::SurfaceBezierNet(ku, kv, surface.weighted_points(), mu_u, mu_v, 0, 0, 1.0,
+                                 net.data());
       out.push_back(NurbsSurface::FromHomogeneous(
           KnotVector(p, ClampedBezierKnots(p, ku[mu_u], ku[mu_u + 1])),
           KnotVector(q, ClampedBezierKnots(q, kv[mu_v], kv[mu_v + 1])), std::move(net)));
@@ -416,49 +356,6 @@ CurvePoint<Dim> EvaluateByRefinement(const NurbsCurve<Dim>& curve, double t, int
   RationalQuotient(hd, order, &out);
   return out;
 }
-
-namespace internal {
-
-SpanFormSurface BuildSpanForm(const NurbsSurface& surface, double scale) {
-  const KnotVector& ku = surface.knots_u();
-  const KnotVector& kv = surface.knots_v();
-  const int p = ku.degree();
-  const int q = kv.degree();
-  std::vector<Eigen::Vector4d> nets;
-  nets.reserve(static_cast<size_t>(SpanFormSurface::NetPointsPerSpan(p, q)) *
-               DomainSpans(ku).size() * DomainSpans(kv).size());
-  for (int mu_u : DomainSpans(ku)) {
-    for (int mu_v : DomainSpans(kv)) {
-      for (const auto& f : SpanFormSurface::kFamilies) {
-        if (f[0] > p || f[1] > q) continue;
-        nets.resize(nets.size() + static_cast<size_t>((p + 1 - f[0]) * (q + 1 - f[1])));
-        SurfaceBezierNet(surface, mu_u, mu_v, f[0], f[1], scale,
-                         nets.data() + nets.size() - (p + 1 - f[0]) * (q + 1 - f[1]));
-      }
-    }
-  }
-  return SpanFormSurface(p, q, ku.Breakpoints(), kv.Breakpoints(), nets);
-}
-
-template <int Dim>
-SpanFormCurve<Dim> BuildSpanForm(const NurbsCurve<Dim>& curve) {
-  using HPoint = typename NurbsCurve<Dim>::HPoint;
-  const KnotVector& k = curve.knots();
-  const int p = k.degree();
-  std::vector<HPoint> nets;
-  for (int mu : DomainSpans(k)) {
-    for (int d = 0; d <= std::min(kMaxOrder, p); ++d) {
-      nets.resize(nets.size() + static_cast<size_t>(p + 1 - d));
-      CurveBezierNet(k, curve.weighted_points(), mu, d, nets.data() + nets.size() - (p + 1 - d));
-    }
-  }
-  return SpanFormCurve<Dim>(p, k.Breakpoints(), nets);
-}
-
-template SpanFormCurve<2> BuildSpanForm(const NurbsCurve<2>&);
-template SpanFormCurve<3> BuildSpanForm(const NurbsCurve<3>&);
-
-}  // namespace internal
 
 #define TANGENT_INSTANTIATE_CURVE_OPS(D)                                                \
   template NurbsCurve<D> RefineKnots(const NurbsCurve<D>&, const KnotVector&);          \

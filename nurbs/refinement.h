@@ -63,13 +63,4 @@ SurfacePoint EvaluateByRefinement(const NurbsSurface& surface, double u, double 
 template <int Dim>
 CurvePoint<Dim> EvaluateByRefinement(const NurbsCurve<Dim>& curve, double t, int order = kMaxOrder);
 
-namespace internal {
-/// Span form of every surface span (Bezier nets of A and its partials from Oslo blossoms), all
-/// homogeneous coordinates multiplied by `scale`.
-SpanFormSurface BuildSpanForm(const NurbsSurface& surface, double scale = 1.0);
-/// Span form of every curve span (Bezier nets of C, C', C'' from Oslo blossoms).
-template <int Dim>
-SpanFormCurve<Dim> BuildSpanForm(const NurbsCurve<Dim>& curve);
-}  // namespace internal
-
 }  // namespace tangent::nurbs

@@ -8,7 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "nurbs/basis.h"
-#include "nurbs/refinement.h"
+#include "nurbs/bezier_nets.h"
 
 namespace tangent::nurbs {
 
@@ -103,7 +103,8 @@ void NurbsSurface::Finish() {
                           [&](const Eigen::Vector4d& h) { return h[3] != cpw_.front()[3]; });
   // A polynomial surface (all weights equal) is stored divided by its weight, so the fast path
   // reads S directly and skips the quotient rule.
-  fast_ = internal::BuildSpanForm(*this, rational_ ? 1.0 : 1.0 / cpw_.front()[3]);
+  fast_ =
+      internal::BuildSpanForm(knots_u_, knots_v_, cpw_, rational_ ? 1.0 : 1.0 / cpw_.front()[3]);
   // Seams: compare both ends at 9 stations across (position to 1e-12 of the net's size, first
   // derivative to 1e-9 relative).
   double size = 0.0;

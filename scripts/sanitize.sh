@@ -14,7 +14,7 @@ bash scripts/install-deps.sh
 flags="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined"
 TANGENT_BUILD_DIR=build-asan bash scripts/build.sh -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   "-DCMAKE_CXX_FLAGS=$flags" "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined"
-# alloc_dealloc_mismatch=0: tests/support/alloc_counter.cc replaces operator new/delete with
+# alloc_dealloc_mismatch=0: testing/alloc_counter.cc replaces operator new/delete with
 # malloc/free for its counts; inline code in a shared library (FCL's BVH) can then allocate
 # through the sanitizer's operator new[] and free through ours (free), a mismatch in name only.
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1:alloc_dealloc_mismatch=0

@@ -19,7 +19,7 @@
 
 #include "contact/extremal.h"
 #include "nurbs/primitives.h"
-#include "tests/nurbs/random_nurbs.h"
+#include "testing/random_nurbs.h"
 
 namespace tangent::contact {
 namespace {

@@ -7,7 +7,7 @@
 
 #include <numbers>
 
-#include "tests/contact/scenes.h"
+#include "testing/contact_scenes.h"
 
 namespace tangent::contact {
 namespace {

@@ -15,8 +15,8 @@
 #include <tuple>
 
 #include "nurbs/primitives.h"
-#include "tests/contact/paperclip_chain.h"
-#include "tests/contact/scenes.h"
+#include "testing/contact_scenes.h"
+#include "testing/paperclip_chain.h"
 
 namespace tangent::contact {
 namespace {

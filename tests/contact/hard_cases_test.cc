@@ -8,7 +8,7 @@
 
 #include "contact/contact_jacobian.h"
 #include "contact/tracker.h"
-#include "tests/contact/scenes.h"
+#include "testing/contact_scenes.h"
 
 namespace tangent::contact {
 namespace {

@@ -10,8 +10,8 @@
 
 #include <numbers>
 
-#include "tests/contact/scenes.h"
-#include "tests/nurbs/random_nurbs.h"
+#include "testing/contact_scenes.h"
+#include "testing/random_nurbs.h"
 
 namespace tangent::contact {
 namespace {

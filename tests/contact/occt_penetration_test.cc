@@ -14,8 +14,8 @@
 
 #include "contact/extremal.h"
 #include "nurbs/primitives.h"
-#include "tests/contact/occt_pose.h"
-#include "tests/contact/scenes.h"
+#include "testing/contact_scenes.h"
+#include "testing/occt_pose.h"
 
 namespace tangent::contact {
 namespace {

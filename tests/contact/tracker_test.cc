@@ -9,8 +9,8 @@
 #include <cstdio>
 #include <numbers>
 
-#include "tests/contact/scenes.h"
-#include "tests/support/alloc_counter.h"
+#include "testing/alloc_counter.h"
+#include "testing/contact_scenes.h"
 
 namespace tangent::contact {
 namespace {

@@ -7,7 +7,7 @@
 
 #include "nurbs/refinement.h"
 #include "nurbs/surface.h"
-#include "tests/nurbs/random_nurbs.h"
+#include "testing/random_nurbs.h"
 
 namespace tangent::nurbs {
 namespace {

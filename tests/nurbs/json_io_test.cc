@@ -9,7 +9,7 @@
 #include <random>
 
 #include "nurbs/primitives.h"
-#include "tests/nurbs/random_nurbs.h"
+#include "testing/random_nurbs.h"
 
 namespace tangent::nurbs {
 namespace {

@@ -1,5 +1,5 @@
 // The servo-loop evaluators never touch the heap: every global operator new is counted while
-// they run (tests/support/alloc_counter.cc; it catches std::vector, Eigen dynamic types and
+// they run (testing/alloc_counter.cc; it catches std::vector, Eigen dynamic types and
 // anything else routed through the C++ allocator).
 
 #include <gtest/gtest.h>
@@ -9,8 +9,8 @@
 #include "nurbs/curve.h"
 #include "nurbs/primitives.h"
 #include "nurbs/surface.h"
-#include "tests/nurbs/random_nurbs.h"
-#include "tests/support/alloc_counter.h"
+#include "testing/alloc_counter.h"
+#include "testing/random_nurbs.h"
 
 namespace tangent::nurbs {
 namespace {

@@ -9,9 +9,9 @@
 #include <random>
 
 #include "nurbs/refinement.h"
+#include "testing/occt_convert.h"
+#include "testing/random_nurbs.h"
 #include "tests/nurbs/high_precision.h"
-#include "tests/nurbs/occt_convert.h"
-#include "tests/nurbs/random_nurbs.h"
 
 namespace tangent::nurbs {
 namespace {

@@ -7,7 +7,7 @@
 
 #include <random>
 
-#include "tests/nurbs/random_nurbs.h"
+#include "testing/random_nurbs.h"
 
 namespace tangent::nurbs {
 namespace {

@@ -14,8 +14,8 @@
 #include "nurbs/curve.h"
 #include "nurbs/refinement.h"
 #include "nurbs/surface.h"
+#include "testing/random_nurbs.h"
 #include "tests/nurbs/exact_truth.h"
-#include "tests/nurbs/random_nurbs.h"
 
 namespace tangent::nurbs {
 namespace {

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "nurbs/primitives.h"
-#include "tests/nurbs/random_nurbs.h"
+#include "testing/random_nurbs.h"
 
 namespace tangent::nurbs {
 namespace {

@@ -10,7 +10,7 @@
 
 #include "nurbs/primitives.h"
 #include "optimizer/contacts.h"
-#include "tests/contact/scenes.h"
+#include "testing/contact_scenes.h"
 
 namespace tangent::optimizer {
 namespace {

@@ -10,7 +10,7 @@
 #include <cstdio>
 
 #include "optimizer/solver.h"
-#include "tests/optimizer/fourbar.h"
+#include "testing/fourbar.h"
 
 namespace tangent::optimizer {
 namespace {

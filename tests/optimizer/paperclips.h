@@ -1,6 +1,6 @@
 #pragma once
 
-// Three paperclips in a chain (seed 001 Fig. 1, 3; poses in tests/contact/paperclip_chain.h) as
+// Three paperclips in a chain (seed 001 Fig. 1, 3; poses in testing/paperclip_chain.h) as
 // a mechanism: clip 0 held fixed, clips 1 and 2 free. Each clip is the exact NURBS tube of
 // nurbs::PaperclipPath (wire radius 0.45 mm).
 
@@ -10,7 +10,7 @@
 #include "nurbs/primitives.h"
 #include "optimizer/contacts.h"
 #include "optimizer/problem.h"
-#include "tests/contact/paperclip_chain.h"
+#include "testing/paperclip_chain.h"
 
 namespace tangent::optimizer::testing {
 

@@ -10,8 +10,8 @@
 #include "optimizer/goals.h"
 #include "optimizer/interaction.h"
 #include "optimizer/solver.h"
+#include "testing/alloc_counter.h"
 #include "tests/optimizer/paperclips.h"
-#include "tests/support/alloc_counter.h"
 
 namespace tangent::optimizer {
 namespace {

@@ -18,9 +18,9 @@
 #include "optimizer/contacts.h"
 #include "optimizer/goals.h"
 #include "optimizer/interaction.h"
-#include "tests/contact/scenes.h"
-#include "tests/optimizer/fourbar.h"
-#include "tests/support/alloc_counter.h"
+#include "testing/alloc_counter.h"
+#include "testing/contact_scenes.h"
+#include "testing/fourbar.h"
 
 namespace tangent::optimizer {
 namespace {

@@ -13,7 +13,7 @@
 #include <string>
 
 #include "server/servo.h"
-#include "tests/support/alloc_counter.h"
+#include "testing/alloc_counter.h"
 
 namespace tangent::server {
 namespace {

@@ -13,9 +13,9 @@
 
 #include <Eigen/Geometry>
 
-#include "bench/drag_path.h"
 #include "server/global_link.h"
-#include "tests/support/alloc_counter.h"
+#include "testing/alloc_counter.h"
+#include "testing/drag_path.h"
 
 namespace tangent::server {
 namespace {

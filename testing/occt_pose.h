@@ -8,7 +8,7 @@
 #include <gp_Trsf.hxx>
 
 #include "contact/placed.h"
-#include "tests/nurbs/occt_convert.h"
+#include "testing/occt_convert.h"
 
 namespace tangent::contact::testing {
 
