@@ -103,5 +103,12 @@ int main(int argc, char** argv) {
     if (histogram[i]) std::printf(" %zu: %d", i, histogram[i]);
   }
   std::printf(" (at the budget: %.2f %%)\n", 100.0 * histogram.back() / times.size());
+  const ServoLoop::TrackingCounts tc = servo.Tracking();
+  std::printf(
+      "contact evaluations: %lld by the tracker, %lld full solves (%.2f %%), %lld lost steps\n",
+      static_cast<long long>(tc.tracked), static_cast<long long>(tc.solves),
+      100.0 * static_cast<double>(tc.solves) /
+          static_cast<double>(std::max<int64_t>(1, tc.tracked + tc.solves)),
+      static_cast<long long>(tc.lost));
   return 0;
 }

@@ -497,6 +497,36 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   return out;
 }
 
+SurfaceSurfaceExtremum ExtremumAt(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                                  const nurbs::NurbsSurface& g, const BodyPose& pose_g,
+                                  const Eigen::Vector4d& u, double tolerance,
+                                  SurfacePairEval* at_solution) {
+  nurbs::SpanHint hf, hg;
+  SurfacePairEval& e = *at_solution;
+  EvaluatePair(f, pose_f, g, pose_g, u, &hf, &hg, &e);
+  SurfaceSurfaceExtremum out;
+  out.u = u;
+  out.p_f = e.f.world.S;
+  out.p_g = e.g.world.S;
+  out.frame_f = ContactFrame(e.f);
+  out.frame_g = ContactFrame(e.g);
+  out.n_g = out.frame_g.col(2);
+  out.direction = out.n_g;
+  out.beta = e.d.dot(out.n_g);
+  out.alignment = out.frame_f.col(2).dot(out.n_g);
+  const double len_g =
+      std::sqrt(std::max(e.g.world.S_u.squaredNorm(), e.g.world.S_v.squaredNorm()));
+  const double residual =
+      std::max(std::max(std::abs(e.F[0]), std::abs(e.F[1])) /
+                   (len_g * std::max(std::abs(out.beta), 1e-3 * len_g)),
+               std::max(std::abs(e.F[2]), std::abs(e.F[3])) / (e.f.N.norm() * len_g));
+  out.status = residual <= tolerance ? ExtremalStatus::kConverged : ExtremalStatus::kNotConverged;
+  out.kind = internal::Classify<4>(e.hess, {},
+                                   std::max(FirstFormScale(e.f.world), FirstFormScale(e.g.world)));
+  out.iterations = 0;
+  return out;
+}
+
 PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::NurbsSurface& f,
                                        const BodyPose& pose_f, const Eigen::Vector2d& seed,
                                        const ExtremalOptions& options,

@@ -111,6 +111,16 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
                                            const ExtremalOptions& options = {},
                                            SurfacePairEval* at_solution = nullptr);
 
+/// The extremum record at parameters u that are already an interior extremal pair (e.g. a
+/// ContactTracker's corrected parameters): one evaluation of the pair, no Newton step. Status
+/// kConverged when the contact equations' scaled residual there is below `tolerance` (the
+/// tracker's measure: |d·x_g|, |d·y_g| over the pair's length scale, |n_f·x_g|, |n_f·y_g| in
+/// radians), else kNotConverged (the caller then solves). Allocation free.
+SurfaceSurfaceExtremum ExtremumAt(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                                  const nurbs::NurbsSurface& g, const BodyPose& pose_g,
+                                  const Eigen::Vector4d& u, double tolerance,
+                                  SurfacePairEval* at_solution);
+
 /// Extremal distance between a world point x and surface f on a body: d = f − x,
 /// equations [d·f_u, d·f_v] (regular at d = 0, where the Jacobian is the first fundamental form).
 struct PointSurfaceExtremum {

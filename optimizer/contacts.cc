@@ -44,7 +44,7 @@ SurfaceContactTerm::SurfaceContactTerm(int body_f, const nurbs::NurbsSurface* f,
 }
 
 std::unique_ptr<TermState> SurfaceContactTerm::MakeState() const {
-  auto st = std::make_unique<State>();
+  auto st = std::make_unique<State>(*f_, *g_);
   st->u = seed_;
   return st;
 }
@@ -53,7 +53,28 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
   const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
   if (st->valid && SamePose(pf.q, st->q_f) && SamePose(pg.q, st->q_g)) return;
-  st->ext = contact::SolveSurfaceSurface(*f_, pf, *g_, pg, st->u, {}, &st->eval);
+  bool done = false;
+  if (st->tracking) {
+    st->track_status = st->tracker.Step(pf.q, pg.q);
+    if (st->track_status == contact::TrackStatus::kTracked) {
+      st->ext = contact::ExtremumAt(*f_, pf, *g_, pg, st->tracker.u(), kTrackedResidual, &st->eval);
+      done = st->ext.status == contact::ExtremalStatus::kConverged;
+    } else if (st->track_status == contact::TrackStatus::kLost) {
+      ++st->lost;
+    }
+  }
+  if (done) {
+    ++st->tracked_steps;
+  } else {
+    // From the tracker's point when it has one close by, else from the last parameters.
+    const Eigen::Vector4d& start =
+        st->tracking && st->track_status == contact::TrackStatus::kTracked ? st->tracker.u()
+                                                                           : st->u;
+    st->ext = contact::SolveSurfaceSurface(*f_, pf, *g_, pg, start, {}, &st->eval);
+    ++st->solves;
+    st->tracking = st->ext.status == contact::ExtremalStatus::kConverged &&
+                   st->tracker.Reset(pf.q, pg.q, st->ext.u) == contact::TrackStatus::kTracked;
+  }
   st->u = st->ext.u;
   st->q_f = pf.q;
   st->q_g = pg.q;

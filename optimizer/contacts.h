@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "contact/extremal.h"
+#include "contact/tracker.h"
 #include "optimizer/joints.h"
 #include "optimizer/term.h"
 
@@ -29,9 +30,20 @@ namespace tangent::optimizer {
 class SurfaceContactTerm final : public Term {
  public:
   struct State final : TermState {
+    State(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g) : tracker(f, g) {}
     bool active = true;
     Eigen::Vector4d u;  ///< tracked (u, v, s, t)
-    Vector7d q_f, q_g;  ///< poses of the last evaluation
+    /// contact/'s tracker follows the pair between solves (predict with u_q, one correction);
+    /// a full extremal solve from the last parameters runs when it is not tracking (start,
+    /// reseed), when it reports anything but `tracked`, or when its corrected point is not an
+    /// extremum to the tolerance, and restarts it.
+    contact::ContactTracker tracker;
+    bool tracking = false;
+    contact::TrackStatus track_status = contact::TrackStatus::kLost;  ///< the last step's
+    int64_t tracked_steps = 0;  ///< evaluations answered by the tracker
+    int64_t solves = 0;         ///< evaluations that needed a full solve
+    int64_t lost = 0;           ///< tracker steps that reported `lost` (then solved)
+    Vector7d q_f, q_g;          ///< poses of the last evaluation
     bool valid = false;
     contact::SurfaceSurfaceExtremum ext;
     contact::SurfacePairEval eval;
@@ -41,6 +53,7 @@ class SurfaceContactTerm final : public Term {
     void Reseed(const Eigen::Vector4d& u_new) {
       u = u_new;
       valid = false;
+      tracking = false;
     }
     /// Contact slots (the server's way of adding and dropping contacts without changing the
     /// problem's structure): an inactive term evaluates nothing and reports β =
@@ -72,6 +85,9 @@ class SurfaceContactTerm final : public Term {
 
   std::unique_ptr<TermState> MakeState() const override;
   static constexpr double kInactiveDistance = 1.0;  // m
+  /// The tracker's corrected point is taken when the contact equations' scaled residual there
+  /// is below this (contact::ExtremumAt): one Newton step from it would move it by ~1e-24.
+  static constexpr double kTrackedResidual = 1e-12;
 
  private:
   void Update(const std::vector<BodyPose>& poses, State* st) const;

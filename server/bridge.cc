@@ -253,6 +253,9 @@ struct Bridge::Impl {
     stats.global_pass_us = engine->global_histogram().max();
     stats.contact_events = c.events_applied;
     stats.events_dropped = c.events_dropped;
+    stats.contacts_tracked = c.contacts_tracked;
+    stats.contacts_solved = c.contacts_solved;
+    stats.contacts_lost = c.contacts_lost;
     lcm->publish(ch.stats, &stats);
     char line[256];
     std::snprintf(line, sizeof(line),
@@ -380,7 +383,8 @@ std::string Bridge::Report() const {
     << "\nglobal_pass_p50_us=" << DurationHistogram::Quantile(g.data(), 0.5)
     << "\nglobal_pass_max_us=" << m.engine->global_histogram().max()
     << "\ncontact_events=" << c.events_applied << "\nevents_dropped=" << c.events_dropped
-    << "\npings_answered=" << summary_.pings;
+    << "\ncontacts_tracked=" << c.contacts_tracked << "\ncontacts_solved=" << c.contacts_solved
+    << "\ncontacts_lost=" << c.contacts_lost << "\npings_answered=" << summary_.pings;
   std::vector<uint64_t> d(DurationHistogram::kBins + 1);
   const std::pair<const char*, const DurationHistogram*> shares[] = {
       {"answer_wait", &m.waited}, {"answer_tick", &m.computed}, {"answer_handoff", &m.handed}};

@@ -243,6 +243,9 @@ void Engine::ServoThread() {
       journal_.Push(j);
     }
     counters.unanswered += result.unanswered;
+    counters.contacts_tracked += result.tracked;
+    counters.contacts_solved += result.solves;
+    counters.contacts_lost += result.lost;
     if (result.answered) {
       if (result.wrench.state == kTimeout) {
         ++counters.timeout_wrenches;

@@ -75,6 +75,9 @@ struct LoopCounters {
   int64_t events_dropped = 0;
   int64_t wrenches_dropped = 0;
   int64_t faults = 0;            ///< ticks with a non-finite or absurd intermediate
+  int64_t contacts_tracked = 0;  ///< contact evaluations the tracker answered
+  int64_t contacts_solved = 0;   ///< contact evaluations that needed a full extremal solve
+  int64_t contacts_lost = 0;     ///< tracker steps that reported `lost` (then re-solved)
   int64_t unanswered = 0;        ///< accepted device states the servo never answered
   int64_t last_accepted = 0;     ///< accepted index of the last device state answered
   int64_t timeout_wrenches = 0;  ///< wrenches sent while the device was silent (state 2)

@@ -220,6 +220,16 @@ Eigen::Vector3d ServoLoop::GraspPoint() const {
   return poses_[static_cast<size_t>(grasp_at_.body)].Point(grasp_at_.point);
 }
 
+ServoLoop::TrackingCounts ServoLoop::Tracking() const {
+  TrackingCounts c;
+  for (const Slot& s : slots_) {
+    c.tracked += s.state->tracked_steps;
+    c.solves += s.state->solves;
+    c.lost += s.state->lost;
+  }
+  return c;
+}
+
 int ServoLoop::active_contacts() const {
   int n = 0;
   for (const Slot& s : slots_) n += s.state->active;
@@ -371,6 +381,7 @@ void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out
   bool fault = fresh && !Follow(*device, dt);
   if (inject.stage == InjectedFault::kGoal) target_[0] = inject.value;
   optimizer::SolveStats st;
+  const TrackingCounts before = Tracking();
   if (!fault && target_.allFinite() && target_.norm() <= options_.fault_distance) {
     grasp_state_->target = target_;
     if (grasp_orientation_state_)
@@ -395,6 +406,10 @@ void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out
   out->iterations = st.iterations;
   out->kkt = st.kkt_residual;
   out->num_contacts = active_contacts();
+  const TrackingCounts after = Tracking();
+  out->tracked = after.tracked - before.tracked;
+  out->solves = after.solves - before.solves;
+  out->lost = after.lost - before.lost;
 
   // The ramp: up over ramp_time while the device is fresh, down while it is not (the force
   // scales down with it and the scene holds at the last target); a fault restarts it from zero.

@@ -61,6 +61,10 @@ struct TickResult {
   bool fault = false;      ///< a non-finite or absurd intermediate: scene restored, force to zero
   int64_t unanswered = 0;  ///< accepted states skipped before the one this tick answered
   bool new_session = false;
+  /// Contact tracking in this tick's solve: evaluations the tracker answered, evaluations that
+  /// needed a full extremal solve, and tracker steps that reported `lost` (each then re-solved
+  /// from the last parameters: a defined event, counted, never a silent jump).
+  int64_t tracked = 0, solves = 0, lost = 0;
 };
 
 class ServoLoop {
@@ -96,6 +100,11 @@ class ServoLoop {
   const optimizer::Problem& problem() const { return *problem_; }
   /// The grasp goal's target (world, m): follows the tool point at the device's follow speed.
   Eigen::Vector3d GraspTarget() const;
+  /// Contact tracking totals over the contact slots since the start (TickResult's, summed).
+  struct TrackingCounts {
+    int64_t tracked = 0, solves = 0, lost = 0;
+  };
+  TrackingCounts Tracking() const;
   /// Injects a fault into the next tick (tests).
   void InjectFault(const InjectedFault& f) { injected_ = f; }
 

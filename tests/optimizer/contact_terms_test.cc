@@ -159,6 +159,69 @@ TEST(ContactTermsTest, BoundaryContactDerivativesMatchFiniteDifferences) {
   CheckDerivatives(mech, *term, st.get(), q, 1e-8, 2e-6);
 }
 
+// The term follows its contact with contact/'s tracker; a jump the tracker cannot follow is
+// reported `lost`, counted, and answered by a full extremal solve: β afterwards equals a fresh
+// solve's, never a silently wrong extremum.
+TEST(ContactTermsTest, TrackerStatesAndALostStepAreDefinedEvents) {
+  Scene s;
+  std::mt19937_64 rng(44);
+  Eigen::VectorXd q = NearContact(s, 0.004, rng);
+  std::vector<BodyPose> poses;
+  s.mech.Poses(q, &poses);
+  const auto term =
+      MakeSurfaceContact(s.a, &s.sphere, s.b, &s.patch,
+                         contact::ClosestSamplePair(s.sphere, poses[static_cast<size_t>(s.a)],
+                                                    s.patch, poses[static_cast<size_t>(s.b)], 23));
+  const std::unique_ptr<TermState> st_ptr = term->MakeState();
+  auto& st = static_cast<SurfaceContactTerm::State&>(*st_ptr);
+  Value(s.mech, *term, &st, q, nullptr);  // the first evaluation solves and starts tracking
+  EXPECT_EQ(st.solves, 1);
+  EXPECT_TRUE(st.tracking);
+  // Small motions: tracked, and β equal to a full solve's to 1e-14.
+  for (int k = 0; k < 50; ++k) {
+    q[0] += 2e-5;
+    q[11] += 1e-4;
+    const double beta = Value(s.mech, *term, &st, q, nullptr);
+    s.mech.Poses(q, &poses);
+    const contact::SurfaceSurfaceExtremum full =
+        contact::SolveSurfaceSurface(s.sphere, poses[static_cast<size_t>(s.a)], s.patch,
+                                     poses[static_cast<size_t>(s.b)], st.extremum().u);
+    EXPECT_NEAR(beta, full.beta, 1e-14) << "step " << k;
+  }
+  EXPECT_EQ(st.track_status, contact::TrackStatus::kTracked);
+  EXPECT_EQ(st.tracked_steps, 50);
+  EXPECT_EQ(st.solves, 1);
+  // Jumps the tracker cannot follow in one step: the ball turned about three axes by 1–2.5 rad
+  // in one evaluation. Each is reported (`lost`, or `singular` where the prediction lands on a
+  // pole), counted, and answered by a full solve from the last parameters: β is a fresh
+  // solve's, bit for bit.
+  int64_t lost = 0, solves = st.solves;
+  for (const Eigen::Vector3d& axis :
+       {Eigen::Vector3d(0.3, 1, 0.2), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 0.2, 1)}) {
+    for (double angle : {1.0, 2.5}) {
+      const Eigen::Quaterniond turn(Eigen::AngleAxisd(angle, axis.normalized()));
+      const Eigen::Quaterniond qa(q[3], q[4], q[5], q[6]);
+      const Eigen::Quaterniond moved = turn * qa;
+      q.segment<4>(3) << moved.w(), moved.x(), moved.y(), moved.z();
+      const Eigen::Vector4d before = st.extremum().u;
+      const double beta = Value(s.mech, *term, &st, q, nullptr);
+      if (st.track_status == contact::TrackStatus::kTracked && st.solves == solves) continue;
+      EXPECT_EQ(st.solves, solves + 1);
+      solves = st.solves;
+      lost += st.track_status == contact::TrackStatus::kLost;
+      s.mech.Poses(q, &poses);
+      const contact::SurfaceSurfaceExtremum fresh =
+          contact::SolveSurfaceSurface(s.sphere, poses[static_cast<size_t>(s.a)], s.patch,
+                                       poses[static_cast<size_t>(s.b)], before);
+      EXPECT_EQ(beta, fresh.beta) << "axis " << axis.transpose() << " angle " << angle;
+    }
+  }
+  EXPECT_EQ(st.lost, lost);
+  EXPECT_GT(lost, 0);
+  EXPECT_GT(st.solves, 3);
+  EXPECT_TRUE(st.tracking);  // restarted from the solve
+}
+
 TEST(ContactTermsTest, PointOnSurfaceDerivativesMatchFiniteDifferences) {
   Scene s;
   std::mt19937_64 rng(42);

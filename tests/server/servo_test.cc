@@ -58,6 +58,8 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
   int events_applied = 0, budget_ticks = 0, ticks = 0;
   long allocations = 0;
   int64_t seq = 1000;
+  const ServoLoop::TrackingCounts tracking_before = servo.Tracking();
+  int64_t tracked = 0, solves = 0, lost = 0;
   for (int k = 0; k < 6000; ++k) {
     const double t = 1e-3 * k;
     const DeviceSample s = bench::DragSample(++seq, t, now);
@@ -68,6 +70,9 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
       now += 250'000;
       worst = std::max(worst, r.violation);
       budget_ticks += r.iterations >= ServoOptions{}.max_iterations;
+      tracked += r.tracked;
+      solves += r.solves;
+      lost += r.lost;
       ++ticks;
       if (r.answered) {
         const double f =
@@ -96,6 +101,18 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
   EXPECT_GT(force_lifted, 0.3);  // the hooks hold the chain back: the hand feels the pull
   EXPECT_LE(max_force, scene->device.max_force + 1e-12);
   EXPECT_EQ(allocations, 0);
+  // The contacts are followed by contact/'s tracker (predict with u_q, correct): its states
+  // reach every tick's result, the totals agree, most evaluations need no full solve, and each
+  // `lost` step was answered by a full solve (counted among the solves).
+  const ServoLoop::TrackingCounts tracking_after = servo.Tracking();
+  EXPECT_EQ(tracked, tracking_after.tracked - tracking_before.tracked);
+  EXPECT_EQ(solves, tracking_after.solves - tracking_before.solves);
+  EXPECT_EQ(lost, tracking_after.lost - tracking_before.lost);
+  EXPECT_GT(tracked, 10 * solves);
+  EXPECT_LE(lost, solves);
+  std::printf("contact evaluations while dragged: %lld tracked, %lld solved, %lld lost\n",
+              static_cast<long long>(tracked), static_cast<long long>(solves),
+              static_cast<long long>(lost));
   // Every tracked contact is a non-penetration contact at β ≥ −1e-6.
   servo.FillSnapshot(&snap);
   for (int k = 0; k < snap.num_contacts; ++k) EXPECT_GE(snap.contacts[k].beta, -1e-6);
