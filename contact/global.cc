@@ -178,6 +178,10 @@ struct GlobalContactStage::Impl {
   std::vector<std::pair<int, int>> surface_pairs;
   std::vector<std::array<int, 4>> candidates;
   std::vector<int> near_a, near_b;
+  // Per surface pair in FindContacts (kept to reuse their storage): the seeds accepted (tracked
+  // contacts first, then clusters) and the offset-triangle pairs of the narrow phase.
+  std::vector<Seed> accepted;
+  std::vector<std::pair<int, int>> triangle_pairs;
   int n = 0, pass = 0;
   bool Allowed(int a, int b) const { return allowed[static_cast<size_t>(a * n + b)] != 0; }
 };
@@ -328,15 +332,10 @@ GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
 
 GlobalContactStage::~GlobalContactStage() = default;
 
-void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
-                             const std::vector<GlobalContact>& tracked,
-                             std::vector<ContactEvent>* events, GlobalStats* stats) {
+void GlobalContactStage::BroadPhase(const std::vector<BodyPose>& poses, GlobalStats* st_out) {
   Impl& m = *impl_;
-  GlobalStats st;
-  events->clear();
-  found_.clear();
-  ++m.pass;
-  // 1. Broad phase on the snapshot, in two levels: FCL's manager over the surfaces' boxes, then,
+  GlobalStats& st = *st_out;
+  // Broad phase on the snapshot, in two levels: FCL's manager over the surfaces' boxes, then,
   //    for each declared pair it reports, the blocks of each surface that overlap the other
   //    surface's box, paired where their own boxes overlap. (One manager over all blocks was
   //    measured first: with 20 clips, ~2000 blocks, its tree dominated the pass.)
@@ -397,135 +396,138 @@ void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
       }
     }
   }
+}
 
+void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
+                                      const std::vector<BodyPose>& poses,
+                                      const std::vector<GlobalContact>& tracked,
+                                      GlobalStats* st_out) {
+  Impl& m = *impl_;
+  GlobalStats& st = *st_out;
   const double rho = options_.neglect_radius, far = options_.far_factor * rho;
-  auto lo_hi = [&](int a, int b) {
-    Box box;
+  // The pair's parameter box (u, v, s, t).
+  Box domains;
+  {
     const nurbs::NurbsSurface& fa = *m.watched[static_cast<size_t>(a)].s.surface;
     const nurbs::NurbsSurface& fb = *m.watched[static_cast<size_t>(b)].s.surface;
-    box.lo << fa.knots_u().domain_begin(), fa.knots_v().domain_begin(), fb.knots_u().domain_begin(),
-        fb.knots_v().domain_begin();
-    box.hi << fa.knots_u().domain_end(), fa.knots_v().domain_end(), fb.knots_u().domain_end(),
+    domains.lo << fa.knots_u().domain_begin(), fa.knots_v().domain_begin(),
+        fb.knots_u().domain_begin(), fb.knots_v().domain_begin();
+    domains.hi << fa.knots_u().domain_end(), fa.knots_v().domain_end(), fb.knots_u().domain_end(),
         fb.knots_v().domain_end();
-    box.periodic = {fa.periodic_u(), fa.periodic_v(), fb.periodic_u(), fb.periodic_v()};
-    return box;
-  };
-  std::vector<Seed> accepted;
-  std::vector<std::pair<int, int>> triangle_pairs;
-  for (size_t first = 0; first < m.candidates.size();) {
-    const int a = m.candidates[first][0], b = m.candidates[first][1];
-    size_t last = first;
-    while (last < m.candidates.size() && m.candidates[last][0] == a && m.candidates[last][1] == b) {
-      ++last;
-    }
-    const Watched& wa = m.watched[static_cast<size_t>(a)];
-    const Watched& wb = m.watched[static_cast<size_t>(b)];
-    const BodyPose& pa = poses[static_cast<size_t>(wa.s.body)];
-    const BodyPose& pb = poses[static_cast<size_t>(wb.s.body)];
-    // 2. Narrow phase on the chunk pairs whose boxes overlap: intersecting offset triangles
-    //    (primitive pairs only, enable_contact = false: seeds are placed from the triangles).
-    //    A chunk pair lying, on both surfaces, within ρ along the surface of a tracked contact is
-    //    skipped: every seed it could give would fall in that contact's sphere of neglect.
-    triangle_pairs.clear();
-    for (size_t k = first; k < last; ++k) {
-      const Chunk& ca = wa.chunks[static_cast<size_t>(m.candidates[k][2])];
-      const Chunk& cb = wb.chunks[static_cast<size_t>(m.candidates[k][3])];
-      bool skip = false;
-      for (const GlobalContact& c : tracked) {
-        if (c.a == a && c.b == b && wa.FarthestAlong(c.u.head<2>(), ca) <= far &&
-            wb.FarthestAlong(c.u.tail<2>(), cb) <= far) {
-          skip = true;
-          break;
-        }
-      }
-      if (skip) {
-        ++st.chunk_pairs_skipped;
-        continue;
-      }
-      ++st.chunk_pairs_tested;
-      ca.object->setTransform(pa.R, pa.q.head<3>());
-      cb.object->setTransform(pb.R, pb.q.head<3>());
-      fcl::CollisionRequestd request(static_cast<size_t>(options_.max_triangle_pairs), false);
-      fcl::CollisionResultd result;
-      fcl::collide(ca.object.get(), cb.object.get(), request, result);
-      for (size_t r = 0; r < result.numContacts(); ++r) {
-        const fcl::Contactd& c = result.getContact(r);
-        const bool swapped = c.o1 != ca.object->collisionGeometry().get();
-        triangle_pairs.emplace_back(ca.triangles[static_cast<size_t>(swapped ? c.b2 : c.b1)],
-                                    cb.triangles[static_cast<size_t>(swapped ? c.b1 : c.b2)]);
-      }
-    }
-    first = last;
-    st.triangle_pairs += static_cast<int>(triangle_pairs.size());
-    // Tracked contacts of this pair: where they are now, as neglect centres.
-    accepted.clear();
+    domains.periodic = {fa.periodic_u(), fa.periodic_v(), fb.periodic_u(), fb.periodic_v()};
+  }
+  std::vector<Seed>& accepted = m.accepted;
+  std::vector<std::pair<int, int>>& triangle_pairs = m.triangle_pairs;
+  const Watched& wa = m.watched[static_cast<size_t>(a)];
+  const Watched& wb = m.watched[static_cast<size_t>(b)];
+  const BodyPose& pa = poses[static_cast<size_t>(wa.s.body)];
+  const BodyPose& pb = poses[static_cast<size_t>(wb.s.body)];
+  // 2. Narrow phase on the chunk pairs whose boxes overlap: intersecting offset triangles
+  //    (primitive pairs only, enable_contact = false: seeds are placed from the triangles).
+  //    A chunk pair lying, on both surfaces, within ρ along the surface of a tracked contact is
+  //    skipped: every seed it could give would fall in that contact's sphere of neglect.
+  triangle_pairs.clear();
+  for (size_t k = first; k < last; ++k) {
+    const Chunk& ca = wa.chunks[static_cast<size_t>(m.candidates[k][2])];
+    const Chunk& cb = wb.chunks[static_cast<size_t>(m.candidates[k][3])];
+    bool skip = false;
     for (const GlobalContact& c : tracked) {
-      if (c.a != a || c.b != b) continue;
-      const Eigen::Vector3d xa = pa.Point(wa.s.surface->Evaluate(c.u[0], c.u[1], 0).S);
-      const Eigen::Vector3d xb = pb.Point(wb.s.surface->Evaluate(c.u[2], c.u[3], 0).S);
-      Seed t;
-      t.u = c.u;
-      t.x = 0.5 * (xa + xb);
-      accepted.push_back(t);
+      if (c.a == a && c.b == b && wa.FarthestAlong(c.u.head<2>(), ca) <= far &&
+          wb.FarthestAlong(c.u.tail<2>(), cb) <= far) {
+        skip = true;
+        break;
+      }
     }
-    const size_t n_tracked = accepted.size();
-    for (const auto& [ta, tb] : triangle_pairs) {
-      // Where the triangles meet: the midpoint of their centroids, projected on each. (FCL's
-      // contact positions, with enable_contact, measured centimetres off for mesh pairs in 0.7
-      // and cost a triangle–triangle intersection each.)
-      Seed s;
-      s.x = 0.5 * (Centroid(wa, pa, ta) + Centroid(wb, pb, tb));
-      s.u << ParametersAt(wa, pa, ta, s.x), ParametersAt(wb, pb, tb, s.x);
-      // 3. Spheres of neglect, unless topologically far on either surface.
-      Seed* owner = nullptr;
-      for (size_t k = 0; k < accepted.size(); ++k) {
-        const Seed& o = accepted[k];
-        if ((o.x - s.x).norm() < rho && wa.Along(o.u.head<2>(), s.u.head<2>()) <= far &&
-            wb.Along(o.u.tail<2>(), s.u.tail<2>()) <= far) {
-          owner = k >= n_tracked ? &accepted[k] : nullptr;
-          ++st.seeds_neglected;
-          s.count = -1;  // neglected
-          break;
-        }
-      }
-      if (s.count < 0 && !owner) continue;
-      Seed& cluster = owner ? *owner : (accepted.push_back(s), accepted.back());
-      AddToCluster(s.u, lo_hi(a, b), &cluster);
+    if (skip) {
+      ++st.chunk_pairs_skipped;
+      continue;
     }
-    // 4. Refine each cluster by the extremal Newton solver: from the mean of its seeds (the
-    //    middle of where the offsets overlap, near the closest or deepest pair), then from its
-    //    first seed and a few other members while that fails. (Measured: from the first seed
-    //    alone, 2.4 % of deep contacts, whose seeds ring the overlap, converged to the far sides'
-    //    pair instead.)
-    for (size_t k = n_tracked; k < accepted.size(); ++k) {
-      SurfaceSurfaceExtremum e;
-      bool ok = false;
-      const Seed& cl = accepted[k];
-      for (int attempt = 0; attempt < 2 + cl.n_members && !ok; ++attempt) {
-        ++st.seeds_refined;
-        const Eigen::Vector4d seed = attempt == 0   ? ClusterMean(cl, lo_hi(a, b))
-                                     : attempt == 1 ? cl.u
-                                                    : cl.members[static_cast<size_t>(attempt - 2)];
-        e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, seed);
-        ok = e.status == ExtremalStatus::kConverged && e.beta < options_.activation &&
-             e.beta > -options_.max_penetration && e.alignment < 0.0;
-      }
-      if (!ok) continue;
-      bool duplicate = false;
-      for (const GlobalContact& f : found_) {
-        if (f.a == a && f.b == b && (f.p_a - e.p_f).norm() < 1e-8 &&
-            (f.p_b - e.p_g).norm() < 1e-8) {
-          duplicate = true;
-          break;
-        }
-      }
-      if (!duplicate) found_.push_back({a, b, e.u, e.beta, e.p_f, e.p_g});
+    ++st.chunk_pairs_tested;
+    ca.object->setTransform(pa.R, pa.q.head<3>());
+    cb.object->setTransform(pb.R, pb.q.head<3>());
+    fcl::CollisionRequestd request(static_cast<size_t>(options_.max_triangle_pairs), false);
+    fcl::CollisionResultd result;
+    fcl::collide(ca.object.get(), cb.object.get(), request, result);
+    for (size_t r = 0; r < result.numContacts(); ++r) {
+      const fcl::Contactd& c = result.getContact(r);
+      const bool swapped = c.o1 != ca.object->collisionGeometry().get();
+      triangle_pairs.emplace_back(ca.triangles[static_cast<size_t>(swapped ? c.b2 : c.b1)],
+                                  cb.triangles[static_cast<size_t>(swapped ? c.b1 : c.b2)]);
     }
   }
-  st.found = static_cast<int>(found_.size());
+  st.triangle_pairs += static_cast<int>(triangle_pairs.size());
+  // Tracked contacts of this pair: where they are now, as neglect centres.
+  accepted.clear();
+  for (const GlobalContact& c : tracked) {
+    if (c.a != a || c.b != b) continue;
+    const Eigen::Vector3d xa = pa.Point(wa.s.surface->Evaluate(c.u[0], c.u[1], 0).S);
+    const Eigen::Vector3d xb = pb.Point(wb.s.surface->Evaluate(c.u[2], c.u[3], 0).S);
+    Seed t;
+    t.u = c.u;
+    t.x = 0.5 * (xa + xb);
+    accepted.push_back(t);
+  }
+  const size_t n_tracked = accepted.size();
+  for (const auto& [ta, tb] : triangle_pairs) {
+    // Where the triangles meet: the midpoint of their centroids, projected on each. (FCL's
+    // contact positions, with enable_contact, measured centimetres off for mesh pairs in 0.7
+    // and cost a triangle–triangle intersection each.)
+    Seed s;
+    s.x = 0.5 * (Centroid(wa, pa, ta) + Centroid(wb, pb, tb));
+    s.u << ParametersAt(wa, pa, ta, s.x), ParametersAt(wb, pb, tb, s.x);
+    // 3. Spheres of neglect, unless topologically far on either surface.
+    Seed* owner = nullptr;
+    for (size_t k = 0; k < accepted.size(); ++k) {
+      const Seed& o = accepted[k];
+      if ((o.x - s.x).norm() < rho && wa.Along(o.u.head<2>(), s.u.head<2>()) <= far &&
+          wb.Along(o.u.tail<2>(), s.u.tail<2>()) <= far) {
+        owner = k >= n_tracked ? &accepted[k] : nullptr;
+        ++st.seeds_neglected;
+        s.count = -1;  // neglected
+        break;
+      }
+    }
+    if (s.count < 0 && !owner) continue;
+    Seed& cluster = owner ? *owner : (accepted.push_back(s), accepted.back());
+    AddToCluster(s.u, domains, &cluster);
+  }
+  // 4. Refine each cluster by the extremal Newton solver: from the mean of its seeds (the
+  //    middle of where the offsets overlap, near the closest or deepest pair), then from its
+  //    first seed and a few other members while that fails. (Measured: from the first seed
+  //    alone, 2.4 % of deep contacts, whose seeds ring the overlap, converged to the far sides'
+  //    pair instead.)
+  for (size_t k = n_tracked; k < accepted.size(); ++k) {
+    SurfaceSurfaceExtremum e;
+    bool ok = false;
+    const Seed& cl = accepted[k];
+    for (int attempt = 0; attempt < 2 + cl.n_members && !ok; ++attempt) {
+      ++st.seeds_refined;
+      const Eigen::Vector4d seed = attempt == 0   ? ClusterMean(cl, domains)
+                                   : attempt == 1 ? cl.u
+                                                  : cl.members[static_cast<size_t>(attempt - 2)];
+      e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, seed);
+      ok = e.status == ExtremalStatus::kConverged && e.beta < options_.activation &&
+           e.beta > -options_.max_penetration && e.alignment < 0.0;
+    }
+    if (!ok) continue;
+    bool duplicate = false;
+    for (const GlobalContact& f : found_) {
+      if (f.a == a && f.b == b && (f.p_a - e.p_f).norm() < 1e-8 && (f.p_b - e.p_g).norm() < 1e-8) {
+        duplicate = true;
+        break;
+      }
+    }
+    if (!duplicate) found_.push_back({a, b, e.u, e.beta, e.p_f, e.p_g});
+  }
+}
 
-  // 5. Events with hysteresis: tracked contacts re-solved from their parameters; found ones not
-  //    tracked are added.
+void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
+                                const std::vector<GlobalContact>& tracked,
+                                std::vector<ContactEvent>* events) const {
+  const Impl& m = *impl_;
+  const double far = options_.far_factor * options_.neglect_radius;
+  // Tracked contacts re-solved from their parameters (removals); found ones not tracked are
+  // added.
   for (const GlobalContact& c : tracked) {
     const Watched& wa = m.watched[static_cast<size_t>(c.a)];
     const Watched& wb = m.watched[static_cast<size_t>(c.b)];
@@ -558,6 +560,29 @@ void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
     if (!known)
       events->push_back({ContactEvent::Kind::kAdded, ContactEvent::Reason::kApproached, f});
   }
+}
+
+void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
+                             const std::vector<GlobalContact>& tracked,
+                             std::vector<ContactEvent>* events, GlobalStats* stats) {
+  Impl& m = *impl_;
+  GlobalStats st;
+  events->clear();
+  found_.clear();
+  ++m.pass;
+  BroadPhase(poses, &st);
+  // Candidates are grouped by surface pair (a, b): one FindContacts per pair.
+  for (size_t first = 0; first < m.candidates.size();) {
+    const int a = m.candidates[first][0], b = m.candidates[first][1];
+    size_t last = first;
+    while (last < m.candidates.size() && m.candidates[last][0] == a && m.candidates[last][1] == b) {
+      ++last;
+    }
+    FindContacts(a, b, first, last, poses, tracked, &st);
+    first = last;
+  }
+  st.found = static_cast<int>(found_.size());
+  Events(poses, tracked, events);
   std::sort(found_.begin(), found_.end(), [](const GlobalContact& x, const GlobalContact& y) {
     return std::tie(x.a, x.b, x.u[0], x.u[1]) < std::tie(y.a, y.b, y.u[0], y.u[1]);
   });

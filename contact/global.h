@@ -106,6 +106,17 @@ class GlobalContactStage {
   struct Impl;  ///< FCL objects and per-surface data (opaque)
 
  private:
+  // The pass's steps (global.cc), in order.
+  /// 1. Broad phase: surface pairs whose boxes overlap, then their overlapping block pairs.
+  void BroadPhase(const std::vector<BodyPose>& poses, GlobalStats* st);
+  /// 2–4 for one surface pair: narrow phase on its block pairs (offset triangles), seeds
+  /// clustered outside the spheres of neglect, clusters refined into contacts (found_).
+  void FindContacts(int a, int b, size_t first, size_t last, const std::vector<BodyPose>& poses,
+                    const std::vector<GlobalContact>& tracked, GlobalStats* st);
+  /// 5. Events with hysteresis: tracked contacts re-solved (removals), found ones added.
+  void Events(const std::vector<BodyPose>& poses, const std::vector<GlobalContact>& tracked,
+              std::vector<ContactEvent>* events) const;
+
   std::unique_ptr<Impl> impl_;
   GlobalOptions options_;
   std::vector<GlobalContact> found_;
