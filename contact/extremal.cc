@@ -264,7 +264,7 @@ double BestDeparture(const nurbs::NurbsSurface& s, const BodyPose& pose, const P
                      (k.domain_end() - k.domain_begin()) * i / static_cast<double>(kPoleAngles);
     const nurbs::SurfacePoint p =
         row.across == 1 ? s.Evaluate(a, row.bound, 1) : s.Evaluate(row.bound, a, 1);
-    const Eigen::Vector3d t = pose.R * (row.across == 1 ? p.S_v : p.S_u) * row.inward;
+    const Eigen::Vector3d t = pose.R_WB * (row.across == 1 ? p.S_v : p.S_u) * row.inward;
     const double slope = sign * d.dot(t) / t.norm();
     if (slope < best) {
       best = slope;
@@ -373,7 +373,7 @@ internal::BoxNewtonResult<N> SolveOnBox(Eval&& eval, Pole&& pole,
 
 namespace {
 
-bool FinitePose(const BodyPose& p) { return p.q.allFinite() && p.R.allFinite(); }
+bool FinitePose(const BodyPose& p) { return p.q.allFinite() && p.R_WB.allFinite(); }
 
 // The seed with each non-finite component replaced by the middle of its domain.
 template <int N>

@@ -45,7 +45,7 @@ struct WorldBox {
 };
 WorldBox Place(const BodyPose& p, const Eigen::Vector3d& c, const Eigen::Vector3d& h) {
   const Eigen::Vector3d x = p.Point(c);
-  const Eigen::Vector3d e = p.R.cwiseAbs() * h;
+  const Eigen::Vector3d e = p.R_WB.cwiseAbs() * h;
   return {x - e, x + e};
 }
 
@@ -342,7 +342,7 @@ void GlobalContactStage::BroadPhase(const std::vector<BodyPose>& poses, GlobalSt
   for (Watched& w : m.watched) {
     if (!w.object) continue;
     const BodyPose& p = poses[static_cast<size_t>(w.s.body)];
-    w.object->setTransform(p.R, p.Point(w.centre));
+    w.object->setTransform(p.R_WB, p.Point(w.centre));
     w.object->computeAABB();
   }
   if (options_.broad_phase == GlobalOptions::BroadPhase::kSweepAndPrune) {
@@ -443,8 +443,8 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
       continue;
     }
     ++st.chunk_pairs_tested;
-    ca.object->setTransform(pa.R, pa.q.head<3>());
-    cb.object->setTransform(pb.R, pb.q.head<3>());
+    ca.object->setTransform(pa.R_WB, pa.q.head<3>());
+    cb.object->setTransform(pb.R_WB, pb.q.head<3>());
     fcl::CollisionRequestd request(static_cast<size_t>(options_.max_triangle_pairs), false);
     fcl::CollisionResultd result;
     fcl::collide(ca.object.get(), cb.object.get(), request, result);

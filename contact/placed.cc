@@ -13,8 +13,8 @@ BodyPose BodyPose::FromCoordinates(const Vector7d& q) {
   const double norm = q.tail<4>().norm();
   const double inv = 1.0 / norm;
   const double w = q[3] * inv, x = q[4] * inv, y = q[5] * inv, z = q[6] * inv;
-  pose.R << 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),  //
-      2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),        //
+  pose.R_WB << 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),  //
+      2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),           //
       2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y);
   const double s = 2.0 * inv;
   pose.omega_map << -x * s, w * s, -z * s, y * s,  //
@@ -29,14 +29,14 @@ void EvaluatePlaced(const nurbs::NurbsSurface& surface, const BodyPose& pose, do
   const nurbs::SurfacePoint& b = out->body;
   nurbs::SurfacePoint& w = out->world;
   w.S = pose.Point(b.S);
-  w.S_u = pose.R * b.S_u;
-  w.S_v = pose.R * b.S_v;
-  w.S_uu = pose.R * b.S_uu;
-  w.S_uv = pose.R * b.S_uv;
-  w.S_vv = pose.R * b.S_vv;
+  w.S_u = pose.R_WB * b.S_u;
+  w.S_v = pose.R_WB * b.S_v;
+  w.S_uu = pose.R_WB * b.S_uu;
+  w.S_uv = pose.R_WB * b.S_uv;
+  w.S_vv = pose.R_WB * b.S_vv;
   out->N = w.S_u.cross(w.S_v);
   out->pole = nurbs::IsDegenerate(b);
-  if (out->pole) out->limit_n = pose.R * nurbs::UnitNormal(surface, u, v, b);
+  if (out->pole) out->limit_n = pose.R_WB * nurbs::UnitNormal(surface, u, v, b);
   out->N_u = w.S_uu.cross(w.S_v) + w.S_u.cross(w.S_uv);
   out->N_v = w.S_uv.cross(w.S_v) + w.S_u.cross(w.S_vv);
 }
@@ -71,8 +71,8 @@ void EvaluatePlaced(const BodyCurve& curve, const BodyPose& pose, double tau, in
                     nurbs::SpanHint* surface_hint, PlacedCurvePoint* out) {
   out->body = curve.Evaluate(tau, span_hint, surface_hint);
   out->world.C = pose.Point(out->body.C);
-  out->world.C1 = pose.R * out->body.C1;
-  out->world.C2 = pose.R * out->body.C2;
+  out->world.C1 = pose.R_WB * out->body.C1;
+  out->world.C2 = pose.R_WB * out->body.C2;
 }
 
 Eigen::Matrix3d ContactFrame(const PlacedSurfacePoint& p) {
@@ -97,14 +97,14 @@ Matrix37d PointJacobian(const BodyPose& pose, const Eigen::Vector3d& p_B) {
   j.leftCols<3>().setIdentity();
   // d(R v)/dt = ω × (R v) = −[R v]× omega_map Q̇: the same derivative as RotateDerivative, from
   // the map the pose already holds.
-  j.rightCols<4>().noalias() = -Skew(pose.R * p_B) * pose.omega_map;
+  j.rightCols<4>().noalias() = -Skew(pose.R_WB * p_B) * pose.omega_map;
   return j;
 }
 
 Matrix37d DirectionJacobian(const BodyPose& pose, const Eigen::Vector3d& a_B) {
   Matrix37d j;
   j.leftCols<3>().setZero();
-  j.rightCols<4>().noalias() = -Skew(pose.R * a_B) * pose.omega_map;
+  j.rightCols<4>().noalias() = -Skew(pose.R_WB * a_B) * pose.omega_map;
   return j;
 }
 

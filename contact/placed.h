@@ -10,13 +10,13 @@ namespace tangent::contact {
 
 /// A pose with its rotation computed once: what every placed evaluation needs.
 struct BodyPose {
-  Vector7d q;                             ///< [p_WB, Q_WB]
-  Eigen::Matrix3d R;                      ///< R_WB = R(Q/|Q|)
+  Vector7d q;                             ///< the body's coordinates [p_WB, Q_WB]
+  Eigen::Matrix3d R_WB;                   ///< rotation body → world: R(Q/|Q|)
   Eigen::Matrix<double, 3, 4> omega_map;  ///< w_W = omega_map · Q̇ (exact for the normalized map)
 
   static BodyPose FromCoordinates(const Vector7d& q);
   /// World position of a body-fixed point: p_WB + R_WB p_BQ.
-  Eigen::Vector3d Point(const Eigen::Vector3d& p_B) const { return q.head<3>() + R * p_B; }
+  Eigen::Vector3d Point(const Eigen::Vector3d& p_B) const { return q.head<3>() + R_WB * p_B; }
 };
 
 /// A surface point on a body: body-frame evaluation and its world image, S(u,v) and partials.

@@ -50,8 +50,8 @@ std::unique_ptr<TermState> SurfaceContactTerm::MakeState() const {
 }
 
 void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) const {
-  const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
-  const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
+  const BodyPose& pf = PoseOf(poses, body_f_);
+  const BodyPose& pg = PoseOf(poses, body_g_);
   if (st->valid && SamePose(pf.q, st->q_f) && SamePose(pg.q, st->q_g)) return;
   bool done = false;
   if (st->tracking) {
@@ -92,8 +92,8 @@ void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
     return;
   }
   Update(poses, st);
-  const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
-  const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
+  const BodyPose& pf = PoseOf(poses, body_f_);
+  const BodyPose& pg = PoseOf(poses, body_g_);
   // β along the direction the extremum measures it: g's normal at an interior extremum, the
   // line between the points at an edge or corner one (where d is not along a normal). Either
   // way ∂β/∂q = n·∂(f − g)/∂q at fixed parameters (the free parameters are stationary).
@@ -160,8 +160,8 @@ void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
   auto* st = static_cast<State*>(state);
   if (!st->active) return;
   Update(poses, st);
-  const BodyPose& pf = poses[static_cast<size_t>(body_f_)];
-  const BodyPose& pg = poses[static_cast<size_t>(body_g_)];
+  const BodyPose& pf = PoseOf(poses, body_f_);
+  const BodyPose& pg = PoseOf(poses, body_g_);
   const Eigen::Vector3d& n = st->ext.direction;
   const bool at_bound =
       std::any_of(st->ext.at_bound.begin(), st->ext.at_bound.end(), [](bool b) { return b; });
@@ -178,7 +178,7 @@ void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
       -contact::PointJacobian(pg, st->eval.g.body.S);
   // n_q: rotation of G and the change of (s, t).
   Eigen::Matrix<double, 3, 14> n_q = Eigen::Matrix<double, 3, 14>::Zero();
-  n_q.rightCols<7>() = contact::DirectionJacobian(pg, pg.R.transpose() * n);
+  n_q.rightCols<7>() = contact::DirectionJacobian(pg, pg.R_WB.transpose() * n);
   n_q += UnitNormalPartial(st->eval.g.N, st->eval.g.N_u) * u_q.row(2) +
          UnitNormalPartial(st->eval.g.N, st->eval.g.N_v) * u_q.row(3);
   Matrix14 H = P.transpose() * n_q;
@@ -215,8 +215,8 @@ std::unique_ptr<TermState> PointOnSurfaceTerm::MakeState() const {
 }
 
 void PointOnSurfaceTerm::Update(const std::vector<BodyPose>& poses, State* st) const {
-  const BodyPose& pa = poses[static_cast<size_t>(point_.body)];
-  const BodyPose& ps = poses[static_cast<size_t>(body_s_)];
+  const BodyPose& pa = PoseOf(poses, point_.body);
+  const BodyPose& ps = PoseOf(poses, body_s_);
   if (st->valid && SamePose(pa.q, st->q_a) && SamePose(ps.q, st->q_s)) return;
   st->ext = contact::SolvePointSurface(pa.Point(point_.point), *s_, ps, st->u, {}, &st->eval);
   st->u = st->ext.u;
@@ -230,8 +230,8 @@ void PointOnSurfaceTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
                                   Eigen::Ref<Eigen::MatrixXd> J_b) const {
   auto* st = static_cast<State*>(state);
   Update(poses, st);
-  const BodyPose& pa = poses[static_cast<size_t>(point_.body)];
-  const BodyPose& ps = poses[static_cast<size_t>(body_s_)];
+  const BodyPose& pa = PoseOf(poses, point_.body);
+  const BodyPose& ps = PoseOf(poses, body_s_);
   const Eigen::Vector3d n = st->eval.N.normalized();
   r[0] = (pa.Point(point_.point) - st->eval.world.S).dot(n);
   J_a = n.transpose() * contact::PointJacobian(pa, point_.point);
@@ -243,8 +243,8 @@ void PointOnSurfaceTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
                                             TermHessian* h) const {
   auto* st = static_cast<State*>(state);
   Update(poses, st);
-  const BodyPose& pa = poses[static_cast<size_t>(point_.body)];
-  const BodyPose& ps = poses[static_cast<size_t>(body_s_)];
+  const BodyPose& pa = PoseOf(poses, point_.body);
+  const BodyPose& ps = PoseOf(poses, body_s_);
   const nurbs::SurfacePoint& b = st->eval.body;
   const nurbs::SurfacePoint& s = st->eval.world;
   const Eigen::Vector3d n = st->eval.N.normalized();
@@ -253,8 +253,8 @@ void PointOnSurfaceTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
   P << contact::PointJacobian(pa, point_.point), -contact::PointJacobian(ps, b.S);
   // u_q from F = [d·S_u, d·S_v] = 0: F_u u_q = −F_q.
   Eigen::Matrix2d F_u;
-  F_u << -s.S_u.dot(s.S_u) + d.dot(ps.R * b.S_uu), -s.S_u.dot(s.S_v) + d.dot(ps.R * b.S_uv),
-      -s.S_v.dot(s.S_u) + d.dot(ps.R * b.S_uv), -s.S_v.dot(s.S_v) + d.dot(ps.R * b.S_vv);
+  F_u << -s.S_u.dot(s.S_u) + d.dot(ps.R_WB * b.S_uu), -s.S_u.dot(s.S_v) + d.dot(ps.R_WB * b.S_uv),
+      -s.S_v.dot(s.S_u) + d.dot(ps.R_WB * b.S_uv), -s.S_v.dot(s.S_v) + d.dot(ps.R_WB * b.S_vv);
   Eigen::Matrix<double, 2, 14> F_q;
   F_q.row(0) = s.S_u.transpose() * P;
   F_q.row(1) = s.S_v.transpose() * P;
@@ -264,7 +264,7 @@ void PointOnSurfaceTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
   const double det = F_u.determinant();
   if (std::abs(det) > 1e-12 * F_u.squaredNorm()) u_q = -F_u.inverse() * F_q;
   Eigen::Matrix<double, 3, 14> n_q = Eigen::Matrix<double, 3, 14>::Zero();
-  n_q.rightCols<7>() = contact::DirectionJacobian(ps, ps.R.transpose() * n);
+  n_q.rightCols<7>() = contact::DirectionJacobian(ps, ps.R_WB.transpose() * n);
   n_q += UnitNormalPartial(st->eval.N, st->eval.N_u) * u_q.row(0) +
          UnitNormalPartial(st->eval.N, st->eval.N_v) * u_q.row(1);
   Matrix14 H = P.transpose() * n_q;

@@ -29,11 +29,11 @@ std::unique_ptr<TermState> OrientationGoalTerm::MakeState() const {
 void OrientationGoalTerm::Evaluate(const std::vector<BodyPose>& poses, TermState* state,
                                    Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                                    Eigen::Ref<Eigen::MatrixXd>) const {
-  const BodyPose& p = poses[static_cast<size_t>(body_)];
+  const BodyPose& p = PoseOf(poses, body_);
   const Eigen::Matrix3d& R_target = static_cast<const State*>(state)->R_target;
   for (int i = 0; i < 3; ++i) {
     const Eigen::Vector3d e = Eigen::Vector3d::Unit(i);
-    r.segment<3>(3 * i) = w_[i] * (p.R * e - R_target.col(i));
+    r.segment<3>(3 * i) = w_[i] * (p.R_WB * e - R_target.col(i));
     J_a.middleRows<3>(3 * i) = w_[i] * contact::DirectionJacobian(p, e);
   }
 }
@@ -93,12 +93,12 @@ class Aiming final : public Term {
   void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
                 Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                 Eigen::Ref<Eigen::MatrixXd>) const override {
-    const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+    const BodyPose& p = PoseOf(poses, at_.body);
     const Eigen::Vector3d P = p.Point(at_.point);
     const Eigen::Vector3d v = t_ - P;
     const double len = v.norm();
     const Eigen::Vector3d u = v / len;
-    r = p.R * at_.axis - u;
+    r = p.R_WB * at_.axis - u;
     // d(v/|v|) = (I − u uᵀ) dv / |v|, dv = −dP.
     const Eigen::Matrix3d du_dP = -(Eigen::Matrix3d::Identity() - u * u.transpose()) / len;
     J_a = contact::DirectionJacobian(p, at_.axis) - du_dP * contact::PointJacobian(p, at_.point);
@@ -121,7 +121,7 @@ class Line final : public Term {
   void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
                 Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                 Eigen::Ref<Eigen::MatrixXd>) const override {
-    const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+    const BodyPose& p = PoseOf(poses, at_.body);
     r = P_ * (p.Point(at_.point) - o_);
     J_a = P_ * contact::PointJacobian(p, at_.point);
   }
@@ -149,7 +149,7 @@ class Plane final : public Term {
   void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
                 Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                 Eigen::Ref<Eigen::MatrixXd>) const override {
-    const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+    const BodyPose& p = PoseOf(poses, at_.body);
     const double s = n_.dot(p.Point(at_.point) - o_);
     if (one_sided_ && s > 0) {
       r[0] = 0.0;
@@ -163,7 +163,7 @@ class Plane final : public Term {
   void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* /*state*/,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override {
-    const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+    const BodyPose& p = PoseOf(poses, at_.body);
     if (one_sided_ && n_.dot(p.Point(at_.point) - o_) > 0) return;
     h->W_a.noalias() += (w[0] * n_) * at_.point.transpose();
   }
@@ -243,7 +243,7 @@ std::unique_ptr<TermState> PositionGoalTerm::MakeState() const {
 void PositionGoalTerm::Evaluate(const std::vector<BodyPose>& poses, TermState* state,
                                 Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                                 Eigen::Ref<Eigen::MatrixXd>) const {
-  const BodyPose& p = poses[static_cast<size_t>(at_.body)];
+  const BodyPose& p = PoseOf(poses, at_.body);
   r = p.Point(at_.point) - static_cast<const State*>(state)->target;
   J_a = contact::PointJacobian(p, at_.point);
 }

@@ -13,7 +13,7 @@ using Matrix37 = Eigen::Matrix<double, 3, 7>;
 
 // World point of an attachment and ∂/∂q_B.
 Eigen::Vector3d Point(const std::vector<BodyPose>& poses, const Attachment& at, Matrix37* J) {
-  const BodyPose& p = poses[static_cast<size_t>(at.body)];
+  const BodyPose& p = PoseOf(poses, at.body);
   *J = contact::PointJacobian(p, at.point);
   return p.Point(at.point);
 }
@@ -21,9 +21,9 @@ Eigen::Vector3d Point(const std::vector<BodyPose>& poses, const Attachment& at, 
 // World image of a body-fixed direction and ∂/∂q_B.
 Eigen::Vector3d Direction(const std::vector<BodyPose>& poses, int body, const Eigen::Vector3d& v,
                           Matrix37* J) {
-  const BodyPose& p = poses[static_cast<size_t>(body)];
+  const BodyPose& p = PoseOf(poses, body);
   *J = contact::DirectionJacobian(p, v);
-  return p.R * v;
+  return p.R_WB * v;
 }
 
 // Two unit vectors perpendicular to a (and to each other).
@@ -52,15 +52,13 @@ Attachment Normalized(Attachment at, const char* joint) {
 
 // cos of the angle between the two axes, (R_a axis_a)·(R_b axis_b).
 double AxisCosine(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b) {
-  return (poses[static_cast<size_t>(a.body)].R * a.axis)
-      .dot(poses[static_cast<size_t>(b.body)].R * b.axis);
+  return (PoseOf(poses, a.body).R_WB * a.axis).dot(PoseOf(poses, b.body).R_WB * b.axis);
 }
 
 // cos φ of the turn about the axis, (R_a ref_a)·(R_b ref_b).
 double ReferenceCosine(const std::vector<BodyPose>& poses, const Attachment& a,
                        const Attachment& b) {
-  return (poses[static_cast<size_t>(a.body)].R * a.reference)
-      .dot(poses[static_cast<size_t>(b.body)].R * b.reference);
+  return (PoseOf(poses, a.body).R_WB * a.reference).dot(PoseOf(poses, b.body).R_WB * b.reference);
 }
 
 // "Axes parallel" with the sense kept. The two rows v = (A·B1, A·B2) (A a's axis, B1, B2 two
@@ -205,9 +203,9 @@ struct HessianRows {
   }
   void WeightedDot(double wk, const std::vector<BodyPose>& poses, int ba, const Eigen::Vector3d& u,
                    int bb, const Eigen::Vector3d& v) {
-    const BodyPose& pa = poses[static_cast<size_t>(ba)];
-    const BodyPose& pb = poses[static_cast<size_t>(bb)];
-    const Eigen::Vector3d U = pa.R * u, V = pb.R * v;
+    const BodyPose& pa = PoseOf(poses, ba);
+    const BodyPose& pb = PoseOf(poses, bb);
+    const Eigen::Vector3d U = pa.R_WB * u, V = pb.R_WB * v;
     h->W_a.noalias() += (wk * V) * u.transpose();
     h->W_b.noalias() += (wk * U) * v.transpose();
     // ∂U/∂Q_a = −[U]× Ω_a, ∂V/∂Q_b = −[V]× Ω_b.
@@ -219,10 +217,10 @@ struct HessianRows {
   void Offset(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b,
               const Eigen::Vector3d& e) {
     const double wk = w[row++];
-    const BodyPose& pa = poses[static_cast<size_t>(a.body)];
-    const BodyPose& pb = poses[static_cast<size_t>(b.body)];
+    const BodyPose& pa = PoseOf(poses, a.body);
+    const BodyPose& pb = PoseOf(poses, b.body);
     const Eigen::Vector3d d = pb.Point(b.point) - pa.Point(a.point);
-    const Eigen::Vector3d E = pa.R * e;
+    const Eigen::Vector3d E = pa.R_WB * e;
     const Matrix37 JPa = contact::PointJacobian(pa, a.point);
     const Matrix37 JPb = contact::PointJacobian(pb, b.point);
     const Matrix37 JE = contact::DirectionJacobian(pa, e);
@@ -308,7 +306,7 @@ class UnitQuaternionTerm final : public Term {
   void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
                 Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                 Eigen::Ref<Eigen::MatrixXd>) const override {
-    const Eigen::Vector4d Q = poses[static_cast<size_t>(body_)].q.tail<4>();
+    const Eigen::Vector4d Q = PoseOf(poses, body_).q.tail<4>();
     r[0] = Q.squaredNorm() - 1.0;
     J_a.setZero();
     J_a.block<1, 4>(0, 3) = 2.0 * Q.transpose();

@@ -15,7 +15,7 @@ Problem::Problem(Mechanism mechanism) : mechanism_(std::move(mechanism)) {
 int Problem::Add(std::vector<Entry>* list, int* rows, TermPtr term, double weight) {
   if (!term) throw std::invalid_argument("problem: null term");
   for (int b : {term->body_a(), term->body_b()}) {
-    if (b >= mechanism_.num_bodies()) {
+    if (b >= mechanism_.num_bodies() || b < -1) {
       throw std::invalid_argument("problem: term \"" + term->name() + "\" refers to body " +
                                   std::to_string(b) + " of " +
                                   std::to_string(mechanism_.num_bodies()));

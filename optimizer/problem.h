@@ -87,6 +87,8 @@ class ProblemData {
   /// The state of entry `index` of a kind (0 equalities, 1 inequalities, 2 objectives), or
   /// nullptr for a stateless term.
   TermState* state(int kind, int index) const {
+    TANGENT_DCHECK(kind >= 0 && kind < 3 && index >= 0 &&
+                   static_cast<size_t>(index) < states_[static_cast<size_t>(kind)].size());
     return states_[static_cast<size_t>(kind)][static_cast<size_t>(index)].get();
   }
   /// The state of `term`, which must be an entry of the problem with a state of type T::State.

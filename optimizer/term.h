@@ -6,11 +6,19 @@
 
 #include <Eigen/Core>
 
+#include "base/check.h"
 #include "optimizer/mechanism.h"
 
 namespace tangent::optimizer {
 
 using Matrix7d = Eigen::Matrix<double, 7, 7>;
+
+/// The pose of body `body` in a pose array (the terms' one way of indexing it: checked in debug
+/// and sanitizer builds; Problem::Add has checked the index against the mechanism).
+inline const BodyPose& PoseOf(const std::vector<BodyPose>& poses, int body) {
+  TANGENT_DCHECK(body >= 0 && static_cast<size_t>(body) < poses.size());
+  return poses[static_cast<size_t>(body)];
+}
 
 /// The second derivatives a term adds for its bodies a and b: 7 x 7 blocks (rows a, columns b
 /// for ab) and, for the curvature of rotated body vectors, rotation weights: a term whose value

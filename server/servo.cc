@@ -113,12 +113,12 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   p.AddObjective(grasp_, 1.0);
   if (options.dof == 6) {
     grasp_orientation_ =
-        optimizer::MakeOrientationGoal(scene->grasp.body, gp.R, Eigen::Vector3d::Ones());
+        optimizer::MakeOrientationGoal(scene->grasp.body, gp.R_WB, Eigen::Vector3d::Ones());
     // E = ½ k_r Σ|R e_i − R_t e_i|² ≈ k_r θ²: weight k_rot / 2 relative to the grasp's k.
     p.AddObjective(grasp_orientation_,
                    0.5 * scene->grasp.rotational_stiffness / scene->device.stiffness);
   } else if (scene->grasp.hold_orientation > 0.0) {
-    p.AddObjective(optimizer::OrientationGoal(scene->grasp.body, gp.R, Eigen::Vector3d::Ones()),
+    p.AddObjective(optimizer::OrientationGoal(scene->grasp.body, gp.R_WB, Eigen::Vector3d::Ones()),
                    scene->grasp.hold_orientation);
   }
   for (const ObjectiveSpec& o : scene->objectives) p.AddObjective(o.term, o.weight);
@@ -148,7 +148,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   device_origin_ = scene->device.origin_given ? scene->device.origin : GraspPoint();
   target_ = GraspPoint();
   grasp_state_->target = target_;
-  orientation_target_ = Eigen::Quaterniond(poses_[static_cast<size_t>(grasp_at_.body)].R);
+  orientation_target_ = Eigen::Quaterniond(poses_[static_cast<size_t>(grasp_at_.body)].R_WB);
   if (grasp_orientation_state_)
     grasp_orientation_state_->R_target = orientation_target_.toRotationMatrix();
   q_good_ = q_;
@@ -464,7 +464,7 @@ void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out
       const contact::BodyPose& gp = poses_[static_cast<size_t>(grasp_at_.body)];
       const Eigen::Vector4d dE_dQ =
           0.5 * scene_->grasp.rotational_stiffness * J9_.rightCols<4>().transpose() * r9_;
-      torque = dv.rotation.transpose() * gp.R *
+      torque = dv.rotation.transpose() * gp.R_WB *
                contact::TorqueFromQuaternionForce(gp.q.tail<4>(), dE_dQ);
     }
     // A force beyond fault_force_factor × max_force (or one whose square overflows) is absurd:

@@ -175,7 +175,7 @@ TEST(ExtremalTest, PointSurfaceOnSphereAndPlane) {
     const double r = 0.02 + 0.06 * (k % 4);  // Inside and outside the sphere.
     const Eigen::Vector3d x = center + r * dir;
     // Seed from the direction in the body frame, a little off.
-    const Eigen::Vector3d b = pf.R.transpose() * dir;
+    const Eigen::Vector3d b = pf.R_WB.transpose() * dir;
     double lon = std::atan2(b.y(), b.x()) / (2 * std::numbers::pi);
     if (lon < 0) lon += 1;
     const double lat = 0.5 + std::asin(std::clamp(b.z(), -1.0, 1.0)) / std::numbers::pi;

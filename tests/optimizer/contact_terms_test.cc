@@ -233,10 +233,10 @@ TEST(ContactTermsTest, PointOnSurfaceDerivativesMatchFiniteDifferences) {
       s.mech.Poses(q, &poses);
       const nurbs::SurfacePoint mid = s.patch.Evaluate(0.5, 0.5, 1);
       const Eigen::Vector3d n_W =
-          poses[static_cast<size_t>(s.b)].R * mid.S_u.cross(mid.S_v).normalized();
+          poses[static_cast<size_t>(s.b)].R_WB * mid.S_u.cross(mid.S_v).normalized();
       const BodyPose& ball = poses[static_cast<size_t>(s.a)];
       const Eigen::Vector3d low_W = ball.q.head<3>() - 0.05 * n_W;
-      const Attachment at{s.a, ball.R.transpose() * (low_W - ball.q.head<3>())};
+      const Attachment at{s.a, ball.R_WB.transpose() * (low_W - ball.q.head<3>())};
       const auto term = MakePointOnSurface(at, s.b, &s.patch, {0.5, 0.5});
       const std::unique_ptr<TermState> st = term->MakeState();
       Value(s.mech, *term, st.get(), q, nullptr);

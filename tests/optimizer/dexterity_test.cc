@@ -95,7 +95,7 @@ TEST(DexterityTest, SerialChainMatchesItsGeometricJacobian) {
   for (int k = 0; k < 3; ++k) {
     const Attachment& a = arm.joints[static_cast<size_t>(k)].first;
     const BodyPose& pa = poses[static_cast<size_t>(a.body)];
-    Jg.col(k) = (pa.R * a.axis).cross(tip - pa.Point(a.point));
+    Jg.col(k) = (pa.R_WB * a.axis).cross(tip - pa.Point(a.point));
   }
   EXPECT_LT((m.J - Jg).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_NEAR(m.dexterity, std::abs(Jg.determinant()), 1e-12);

@@ -50,7 +50,7 @@ struct ChainProblem {
     start = poses[static_cast<size_t>(chain.clip[2])].Point(handle.point);
     goal = MakePositionGoal(handle, start);
     problem.AddObjective(goal, 1.0);
-    problem.AddObjective(OrientationGoal(chain.clip[2], poses[2].R, {1, 1, 1}), 1e-4);
+    problem.AddObjective(OrientationGoal(chain.clip[2], poses[2].R_WB, {1, 1, 1}), 1e-4);
   }
 };
 
