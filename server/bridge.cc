@@ -15,6 +15,7 @@
 #include <tangent/scene_state_t.hpp>
 #include <tangent/wrench_t.hpp>
 
+#include "server/lcm_convert.h"
 #include "server/lcm_subscriptions.h"
 
 namespace tangent::server {
@@ -106,30 +107,10 @@ struct Bridge::Impl {
   }
 
   void OnDevice(const tangent::device_state_t& m) {
-    DeviceReading r;
-    r.device_id = m.device_id;
-    r.session = m.session;
-    r.utime = m.utime;
-    r.seq = m.seq;
-    std::memcpy(r.position, m.position, sizeof(r.position));
-    std::memcpy(r.orientation, m.orientation, sizeof(r.orientation));
-    std::memcpy(r.velocity, m.velocity, sizeof(r.velocity));
     const int64_t received = MonotonicNs();
-    const DeviceFilter::Verdict v = filter.Check(r, received);
+    const DeviceFilter::Verdict v = filter.Check(ToReading(m), received);
     if (!DeviceFilter::Accepted(v)) return;
-    DeviceSample s;
-    s.utime = m.utime;
-    s.device_id = m.device_id;
-    s.session = m.session;
-    s.seq = m.seq;
-    s.session_index = filter.session_index();
-    s.accepted = filter.counts().accepted;
-    std::memcpy(s.position, m.position, sizeof(s.position));
-    std::memcpy(s.orientation, m.orientation, sizeof(s.orientation));
-    std::memcpy(s.velocity, m.velocity, sizeof(s.velocity));
-    s.buttons = m.buttons;
-    s.received_ns = received;
-    engine->Publish(s);
+    engine->Publish(ToSample(m, filter.session_index(), filter.counts().accepted, received));
     awaiting = true;
     awaited_seq = m.seq;
   }
@@ -143,17 +124,7 @@ struct Bridge::Impl {
     WrenchSample w;
     while (engine->wrenches().Pop(&w)) {
       if (w.seq >= awaited_seq) awaiting = false;
-      wrench.utime = w.utime;
-      wrench.device_id = w.device_id;
-      wrench.session = w.session;
-      wrench.seq = w.seq;
-      wrench.server_utime = w.server_utime;
-      wrench.frame = "device";
-      for (int i = 0; i < 3; ++i) {
-        wrench.force[i] = w.force[i];
-        wrench.torque[i] = w.torque[i];
-      }
-      wrench.state = w.state;
+      ToWrenchMsg(w, &wrench);
       lcm->publish(ch.wrench, &wrench);
       ++summary->wrenches_sent;
       // Where the server's share of the round trip goes.
@@ -167,35 +138,9 @@ struct Bridge::Impl {
   void PublishScene(int64_t now) {
     engine->snapshot().Read(&snap);
     const Scene& sc = engine->servo().scene();
-    contacts.utime = now / 1000;
-    contacts.num_contacts = snap.num_contacts;
-    contacts.contacts.resize(static_cast<size_t>(snap.num_contacts));
-    for (int k = 0; k < snap.num_contacts; ++k) {
-      const TrackedContact& c = snap.contacts[k];
-      tangent::contact_state_t& m = contacts.contacts[static_cast<size_t>(k)];
-      m.body_a = c.body_a;
-      m.body_b = c.body_b;
-      m.surface_a = c.surface_a;
-      m.surface_b = c.surface_b;
-      std::memcpy(m.params, c.u, sizeof(m.params));
-      m.distance = c.beta;
-      std::memcpy(m.point_a, c.p_a, sizeof(m.point_a));
-      std::memcpy(m.point_b, c.p_b, sizeof(m.point_b));
-      m.force = c.force;
-    }
+    ToContactStates(snap, now / 1000, &contacts);
     lcm->publish(ch.contacts, &contacts);
-    scene_msg.utime = now / 1000;
-    scene_msg.num_bodies = snap.num_bodies;
-    scene_msg.names.resize(static_cast<size_t>(snap.num_bodies));
-    scene_msg.position.resize(static_cast<size_t>(snap.num_bodies), std::vector<double>(3));
-    scene_msg.orientation.resize(static_cast<size_t>(snap.num_bodies), std::vector<double>(4));
-    for (int b = 0; b < snap.num_bodies; ++b) {
-      scene_msg.names[static_cast<size_t>(b)] = sc.mechanism.body(b).name;
-      for (int i = 0; i < 3; ++i) scene_msg.position[static_cast<size_t>(b)][i] = snap.q[b][i];
-      for (int i = 0; i < 4; ++i)
-        scene_msg.orientation[static_cast<size_t>(b)][i] = snap.q[b][3 + i];
-    }
-    std::memcpy(scene_msg.grasp_target, snap.grasp_target, sizeof(scene_msg.grasp_target));
+    ToSceneState(snap, sc, now / 1000, &scene_msg);
     lcm->publish(ch.scene, &scene_msg);
   }
 
