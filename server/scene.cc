@@ -199,33 +199,11 @@ int Scene::SurfaceIndex(const std::string& n) const {
   return -1;
 }
 
-std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& where,
-                                  const std::string& base_dir) {
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw SceneError(where + ": not valid JSON: " + e.what());
-  }
-  const Node root{j, where, ""};
-  if (!j.is_object()) root.Fail("a scene must be a JSON object");
-  auto scene = std::make_unique<Scene>();
-  Scene& s = *scene;
-  s.path = where;
-  s.name = root.String("name", where);
-  const std::string unit_name = root.String("length_unit", "m");
-  double unit = 1.0;
-  if (unit_name == "mm") {
-    unit = 1e-3;
-  } else if (unit_name == "cm") {
-    unit = 1e-2;
-  } else if (unit_name != "m") {
-    root.At("length_unit").Fail("must be \"m\", \"cm\" or \"mm\", got \"" + unit_name + "\"");
-  }
+namespace {
 
-  s.least_astonishment = root.Positive("least_astonishment", s.least_astonishment);
-
-  // Bodies.
+// The bodies: names, placements, masses, inertia, rigidity.
+void ParseBodies(const Node& root, double unit, Scene* out) {
+  Scene& s = *out;
   const Node bodies = root.At("bodies");
   if (bodies.Size() == 0) bodies.Fail("a scene needs at least one body");
   for (size_t i = 0; i < bodies.Size(); ++i) {
@@ -252,8 +230,11 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
     }
   }
   if (s.mechanism.num_moving() == 0) bodies.Fail("no moving body: nothing to manipulate");
+}
 
-  // Surfaces.
+// The surfaces, each on a body.
+void ParseSurfaces(const Node& root, double unit, const std::string& base_dir, Scene* out) {
+  Scene& s = *out;
   const Node surfaces = root.At("surfaces");
   for (size_t i = 0; i < surfaces.Size(); ++i) {
     const Node n = surfaces.At(i);
@@ -274,8 +255,11 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
     }
     s.surfaces.push_back(SceneSurface{name, b, nurbs::Transformed(local, X), {}, false});
   }
+}
 
-  // Joints.
+// The joints between bodies.
+void ParseJoints(const Node& root, double unit, Scene* out) {
+  Scene& s = *out;
   if (root.Has("joints")) {
     const Node joints = root.At("joints");
     for (size_t i = 0; i < joints.Size(); ++i) {
@@ -310,8 +294,11 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
       s.joints.push_back(std::move(js));
     }
   }
+}
 
-  // Contact pairs that may occur.
+// The contact pairs that may occur.
+void ParsePairs(const Node& root, Scene* out) {
+  Scene& s = *out;
   if (root.Has("contacts")) {
     const Node contacts = root.At("contacts");
     std::set<std::pair<int, int>> seen;
@@ -354,8 +341,11 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
       s.pairs.push_back(c);
     }
   }
+}
 
-  // Grasp.
+// The grasp.
+void ParseGrasp(const Node& root, double unit, Scene* out) {
+  Scene& s = *out;
   {
     const Node g = root.At("grasp");
     const std::string body = g.At("body").String();
@@ -367,8 +357,11 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
     if (s.grasp.hold_orientation < 0.0) g.At("hold_orientation").Fail("must not be negative");
     s.grasp.rotational_stiffness = g.Positive("rotational_stiffness", s.grasp.rotational_stiffness);
   }
+}
 
-  // Objectives (weighted goals besides the grasp).
+// Objectives (weighted goals besides the grasp).
+void ParseObjectives(const Node& root, double unit, Scene* out) {
+  Scene& s = *out;
   if (root.Has("objectives")) {
     const Node objectives = root.At("objectives");
     for (size_t i = 0; i < objectives.Size(); ++i) {
@@ -395,8 +388,11 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
       }
     }
   }
+}
 
-  // Device mapping and coupling.
+// The device mapping and the coupling.
+void ParseDevice(const Node& root, double unit, Scene* out) {
+  Scene& s = *out;
   if (root.Has("device")) {
     const Node d = root.At("device");
     DeviceSpec& dv = s.device;
@@ -455,13 +451,55 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
     s.offset_margin = o.Positive("margin", s.offset_margin / unit) * unit;
     s.offset_max_edge = o.Positive("max_edge", s.offset_max_edge / unit) * unit;
   }
-  // Offset meshes for the surfaces the global stage watches, certified (load log).
+}
+
+// Offset meshes for the surfaces the global stage watches, certified (load log).
+void BuildOffsetMeshes(Scene* out) {
+  Scene& s = *out;
   for (SceneSurface& sf : s.surfaces) {
     if (!sf.watched) continue;
     sf.mesh =
         nurbs::MakeOffsetMesh(sf.surface, s.offset_tolerance, s.offset_margin, s.offset_max_edge);
     s.load_log.push_back(nurbs::CertifyOffsetMesh(sf.surface, sf.mesh, 60).Report(sf.name));
   }
+}
+
+}  // namespace
+
+std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& where,
+                                  const std::string& base_dir) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw SceneError(where + ": not valid JSON: " + e.what());
+  }
+  const Node root{j, where, ""};
+  if (!j.is_object()) root.Fail("a scene must be a JSON object");
+  auto scene = std::make_unique<Scene>();
+  Scene& s = *scene;
+  s.path = where;
+  s.name = root.String("name", where);
+  const std::string unit_name = root.String("length_unit", "m");
+  double unit = 1.0;
+  if (unit_name == "mm") {
+    unit = 1e-3;
+  } else if (unit_name == "cm") {
+    unit = 1e-2;
+  } else if (unit_name != "m") {
+    root.At("length_unit").Fail("must be \"m\", \"cm\" or \"mm\", got \"" + unit_name + "\"");
+  }
+
+  s.least_astonishment = root.Positive("least_astonishment", s.least_astonishment);
+
+  ParseBodies(root, unit, &s);
+  ParseSurfaces(root, unit, base_dir, &s);
+  ParseJoints(root, unit, &s);
+  ParsePairs(root, &s);
+  ParseGrasp(root, unit, &s);
+  ParseObjectives(root, unit, &s);
+  ParseDevice(root, unit, &s);
+  BuildOffsetMeshes(&s);
   return scene;
 }
 
