@@ -401,6 +401,33 @@ Extremum InvalidExtremum(const Eigen::Matrix<double, N, 1>& u) {
 
 }  // namespace
 
+namespace {
+
+// The record of the pair evaluation e at parameters u as an interior extremum: points, frames,
+// β = d·n_g along n_g, alignment (callers override β and direction at a boundary).
+void FillPairFields(const SurfacePairEval& e, const Eigen::Vector4d& u,
+                    SurfaceSurfaceExtremum* out) {
+  out->u = u;
+  out->p_f = e.f.world.S;
+  out->p_g = e.g.world.S;
+  out->frame_f = ContactFrame(e.f);
+  out->frame_g = ContactFrame(e.g);
+  out->n_g = out->frame_g.col(2);
+  out->direction = out->n_g;
+  out->beta = e.d.dot(out->n_g);
+  out->alignment = out->frame_f.col(2).dot(out->n_g);
+}
+
+}  // namespace
+
+double ScaledContactResidual(const SurfacePairEval& e, double beta) {
+  const double len_g =
+      std::sqrt(std::max(e.g.world.S_u.squaredNorm(), e.g.world.S_v.squaredNorm()));
+  return std::max(std::max(std::abs(e.F[0]), std::abs(e.F[1])) /
+                      (len_g * std::max(std::abs(beta), 1e-3 * len_g)),
+                  std::max(std::abs(e.F[2]), std::abs(e.F[3])) / (e.f.N.norm() * len_g));
+}
+
 SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                                            const nurbs::NurbsSurface& g, const BodyPose& pose_g,
                                            const Eigen::Vector4d& seed,
@@ -472,23 +499,14 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   const auto r = SolveOnBox<4>(eval, pole, seed, lo, hi, opt, options.seek, &sys);
   // e is the pair at r.x (SolveOnBox's contract).
   SurfaceSurfaceExtremum out;
-  out.u = r.x;
-  out.p_f = e.f.world.S;
-  out.p_g = e.g.world.S;
-  out.frame_f = ContactFrame(e.f);
-  out.frame_g = ContactFrame(e.g);
-  out.n_g = out.frame_g.col(2);
+  FillPairFields(e, r.x, &out);
   out.at_bound = r.active;
   const double dist = e.d.norm();
   if (std::any_of(r.active.begin(), r.active.end(), [](bool b) { return b; }) && dist > 0.0) {
     const double side = BoundarySide(e.d, out.frame_f.col(2), out.frame_g.col(2));
     out.direction = side * (e.d / dist);
     out.beta = side * dist;
-  } else {
-    out.direction = out.n_g;
-    out.beta = e.d.dot(out.n_g);
   }
-  out.alignment = out.frame_f.col(2).dot(out.n_g);
   out.status = StatusOf(r);
   out.kind = KindAt<4>(r, sys, lo, hi);
   out.iterations = r.iterations;
@@ -505,21 +523,8 @@ SurfaceSurfaceExtremum ExtremumAt(const nurbs::NurbsSurface& f, const BodyPose& 
   SurfacePairEval& e = *at_solution;
   EvaluatePair(f, pose_f, g, pose_g, u, &hf, &hg, &e);
   SurfaceSurfaceExtremum out;
-  out.u = u;
-  out.p_f = e.f.world.S;
-  out.p_g = e.g.world.S;
-  out.frame_f = ContactFrame(e.f);
-  out.frame_g = ContactFrame(e.g);
-  out.n_g = out.frame_g.col(2);
-  out.direction = out.n_g;
-  out.beta = e.d.dot(out.n_g);
-  out.alignment = out.frame_f.col(2).dot(out.n_g);
-  const double len_g =
-      std::sqrt(std::max(e.g.world.S_u.squaredNorm(), e.g.world.S_v.squaredNorm()));
-  const double residual =
-      std::max(std::max(std::abs(e.F[0]), std::abs(e.F[1])) /
-                   (len_g * std::max(std::abs(out.beta), 1e-3 * len_g)),
-               std::max(std::abs(e.F[2]), std::abs(e.F[3])) / (e.f.N.norm() * len_g));
+  FillPairFields(e, u, &out);
+  const double residual = ScaledContactResidual(e, out.beta);
   out.status = residual <= tolerance ? ExtremalStatus::kConverged : ExtremalStatus::kNotConverged;
   out.kind = internal::Classify<4>(e.hess, {},
                                    std::max(FirstFormScale(e.f.world), FirstFormScale(e.g.world)));

@@ -111,6 +111,11 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
                                            const ExtremalOptions& options = {},
                                            SurfacePairEval* at_solution = nullptr);
 
+/// The contact equations' scaled residual at a pair evaluation with signed distance beta:
+/// |d·g_s|, |d·g_t| over L·max(|β|, 1e-3 L) with L = max(|g_s|, |g_t|), and |N_f·g_s|,
+/// |N_f·g_t| over |N_f| L (angles in radians). The tracker's and ExtremumAt's one measure.
+double ScaledContactResidual(const SurfacePairEval& e, double beta);
+
 /// The extremum record at parameters u that are already an interior extremal pair (e.g. a
 /// ContactTracker's corrected parameters): one evaluation of the pair, no Newton step. Status
 /// kConverged when the contact equations' scaled residual there is below `tolerance` (the

@@ -66,14 +66,7 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
   eval_.F_u.computeInverseAndDetWithCheck(inverse, det, invertible, 0.0);
   const Eigen::Vector3d n_g = eval_.g.unit_normal();  // the limit normal at a pole
   beta_ = eval_.d.dot(n_g);
-  // Scaled residual: d·x_g, d·y_g over the pair's length scale L·max(|β|, 1e-3 L) with
-  // L = max(|g_s|, |g_t|), and N_f·x_g, N_f·y_g over |N_f| L (angles in radians).
-  const double len_g =
-      std::sqrt(std::max(eval_.g.world.S_u.squaredNorm(), eval_.g.world.S_v.squaredNorm()));
-  const double inv_len = 1.0 / (len_g * std::max(std::abs(beta_), 1e-3 * len_g));
-  const double inv_ang = 1.0 / (eval_.f.N.norm() * len_g);
-  residual_ = std::max(std::max(std::abs(eval_.F[0]), std::abs(eval_.F[1])) * inv_len,
-                       std::max(std::abs(eval_.F[2]), std::abs(eval_.F[3])) * inv_ang);
+  residual_ = ScaledContactResidual(eval_, beta_);
   // A cheap guard before solving (the determinant against the product of the row sizes, which
   // bounds it); the closed form below applies the solver's kSingularRcond and refuses too.
   const double det_scale = eval_.F_u.cwiseAbs().rowwise().maxCoeff().prod();

@@ -1,11 +1,14 @@
 #pragma once
 
+#include <vector>
+
 // The spatial four-bar of seed 001 Fig. 7: ground, crank (revolute to ground about z), coupler
 // ("top link", universal joint to the crank), rocker (spherical joint to the coupler, revolute to
 // ground about y). One degree of freedom (RUSR). A point grasp pulls the middle of the coupler.
 
 #include <numbers>
 
+#include "contact/extremal.h"
 #include "nurbs/primitives.h"
 #include "optimizer/contacts.h"
 #include "optimizer/goals.h"
@@ -116,6 +119,14 @@ struct FloatingGraspFourBar : FourBar {
   }
 
   Eigen::Vector3d HandPoint(int step) const { return PathPoint(step) + Reach(); }
+
+  /// A seed (u, v, s, t) for the tip–pad contact at the initial poses: the closest sample pair.
+  Eigen::Vector4d RestSeed() const {
+    std::vector<BodyPose> poses;
+    mechanism.Poses(mechanism.InitialCoordinates(), &poses);
+    return contact::ClosestSamplePair(tip, poses[static_cast<size_t>(finger)], pad,
+                                      poses[static_cast<size_t>(coupler)], 47);
+  }
 
   Problem MakeProblem(std::shared_ptr<PositionGoalTerm>* goal,
                       std::shared_ptr<SurfaceContactTerm>* contact, const Eigen::Vector4d& seed,

@@ -72,11 +72,7 @@ TEST(SolverTest, FourBarDragKeepsJointsExactOverAThousandWarmSolves) {
 
 TEST(SolverTest, FourBarDraggedThroughAFloatingSurfaceContactKeepsItExact) {
   testing::FloatingGraspFourBar fb;
-  std::vector<BodyPose> poses;
-  fb.mechanism.Poses(fb.mechanism.InitialCoordinates(), &poses);
-  const Eigen::Vector4d seed =
-      contact::ClosestSamplePair(fb.tip, poses[static_cast<size_t>(fb.finger)], fb.pad,
-                                 poses[static_cast<size_t>(fb.coupler)], 47);
+  const Eigen::Vector4d seed = fb.RestSeed();
   std::shared_ptr<PositionGoalTerm> goal;
   std::shared_ptr<SurfaceContactTerm> contact;
   const Problem p = fb.MakeProblem(&goal, &contact, seed);
@@ -130,11 +126,7 @@ TEST(SolverTest, FourBarDraggedThroughAFloatingSurfaceContactKeepsItExact) {
 // serial answers bit for bit; a thread on a different path does not disturb them.
 TEST(SolverTest, OneProblemSolvedOnSeveralThreadsAtOnceGivesTheSerialAnswers) {
   testing::FloatingGraspFourBar fb;
-  std::vector<BodyPose> poses;
-  fb.mechanism.Poses(fb.mechanism.InitialCoordinates(), &poses);
-  const Eigen::Vector4d seed =
-      contact::ClosestSamplePair(fb.tip, poses[static_cast<size_t>(fb.finger)], fb.pad,
-                                 poses[static_cast<size_t>(fb.coupler)], 47);
+  const Eigen::Vector4d seed = fb.RestSeed();
   std::shared_ptr<PositionGoalTerm> goal;
   std::shared_ptr<SurfaceContactTerm> contact;
   const Problem p = fb.MakeProblem(&goal, &contact, seed);
