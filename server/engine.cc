@@ -146,12 +146,8 @@ void Engine::Publish(const DeviceSample& s) {
 
 void Engine::set_consumer_watching(bool watching) { consumer_watching_.store(watching); }
 
-void Engine::ServoThread() {
-  // Timer slack 1 ns: the default 50 µs lets the kernel coalesce our wake-up that late.
-  prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
-  PinToCore(options_.servo_cpu);
-  const int64_t period = static_cast<int64_t>(1e9 / options_.rate_hz);
-  const int64_t spin = static_cast<int64_t>(options_.spin_us * 1e3);
+// The servo thread's own state, on its stack: the tick's buffers and its clock.
+struct Engine::ServoState {
   LoopCounters counters;
   TickResult result;
   DeviceSample sample;
@@ -160,152 +156,190 @@ void Engine::ServoThread() {
   bool was_fresh = false;
   Snapshot snap;
   ContactEventMsg event;
-  int64_t next = MonotonicNs() + period;
+  int64_t period = 0, spin = 0;  ///< ns
+  int64_t next = 0;              ///< the next deadline
   // The device's own rhythm (a 1 kHz stream arrives every millisecond give or take the
   // machine's jitter): the servo also spins from device_lead before the next expected arrival
   // to device_lag after it, so a state is seen at once instead of through a futex wake-up
   // (measured: answer_wait p50 25 µs through the doorbell).
-  const int64_t device_lead = static_cast<int64_t>(options_.device_lead_us * 1e3);
-  const int64_t device_lag = static_cast<int64_t>(options_.device_lag_us * 1e3);
+  int64_t device_lead = 0, device_lag = 0;
   int64_t last_arrival = 0, device_period = 0;
+};
+
+void Engine::ServoThread() {
+  // Timer slack 1 ns: the default 50 µs lets the kernel coalesce our wake-up that late.
+  prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
+  PinToCore(options_.servo_cpu);
+  ServoState s;
+  s.period = static_cast<int64_t>(1e9 / options_.rate_hz);
+  s.spin = static_cast<int64_t>(options_.spin_us * 1e3);
+  s.device_lead = static_cast<int64_t>(options_.device_lead_us * 1e3);
+  s.device_lag = static_cast<int64_t>(options_.device_lag_us * 1e3);
+  s.next = MonotonicNs() + s.period;
   while (running_.load(std::memory_order_relaxed)) {
-    // Hybrid wait: sleep to just before the deadline (or the device's next state), then spin; a
-    // device state arriving meanwhile is answered at once.
-    bool early = false;
-    int64_t wake = next - spin;
-    if (options_.spin_for_device && device_period > 0) {
-      const int64_t expected = last_arrival + device_period;
-      const int64_t now = MonotonicNs();
-      if (now < expected + device_lag) wake = std::min(wake, expected - device_lead);
-    }
-    if (wake > MonotonicNs()) {
-      servo_sleeping_.store(true);
-      const uint32_t bell = doorbell_.load();
-      if (device_.version() == seen_version) SleepUntilOrWoken(&doorbell_, bell, wake);
-      servo_sleeping_.store(false, std::memory_order_relaxed);
-      early = device_.version() != seen_version;
-    }
-    while (!early && MonotonicNs() < next) {
-      if (device_.version() != seen_version) {
-        early = true;
-        break;
-      }
-      CpuRelax();
-    }
+    const bool early = WaitForTick(&s);
     const int64_t start = MonotonicNs();
-    if (!early && start > next + period) ++counters.overruns;
-    // Contact events from the global stage.
-    while (events_.Pop(&event)) {
-      const bool applied = servo_->Apply(event);
-      if (applied) {
-        ++counters.events_applied;
-      } else {
-        ++counters.events_dropped;
-      }
-      JournalEntry j;
-      j.tick = counters.ticks;
-      j.time_ns = start;
-      j.kind = applied ? JournalEntry::kEventApplied : JournalEntry::kEventDropped;
-      j.added = event.added;
-      j.surface_a = event.surface_a;
-      j.surface_b = event.surface_b;
-      for (int i = 0; i < 4; ++i) j.u[i] = event.u[i];
-      journal_.Push(j);
+    if (!early && start > s.next + s.period) ++s.counters.overruns;
+    ApplyEvents(&s, start);
+    ReadDevice(&s);
+    servo_->Tick(s.have_sample ? &s.sample : nullptr, start, &s.result);
+    CountTick(&s, start);
+    if (s.result.answered) SendWrench(&s);
+    if (s.result.violation > options_.journal_violation) JournalViolation(&s, start);
+    CloseTick(&s, early);
+    if ((s.counters.ticks & 3) == 0 || early) {
+      servo_->FillSnapshot(&s.snap);
+      s.snap.events_taken = s.counters.events_applied + s.counters.events_dropped;
+      snapshot_.Write(s.snap);
     }
-    const int64_t previous_arrival = have_sample ? sample.received_ns : 0;
-    const unsigned v = device_.Read(&sample);
-    if (v != 0 && v != seen_version) {
-      // The device's period: a running estimate of the gaps (a pause or a first state resets).
-      const int64_t gap = sample.received_ns - previous_arrival;
-      if (previous_arrival > 0 && gap > 0 && gap < 20'000'000) {
-        device_period = device_period > 0 ? (7 * device_period + gap) / 8 : gap;
-      } else {
-        device_period = 0;
-      }
-      last_arrival = sample.received_ns;
-    }
-    if (v != 0) {
-      have_sample = true;
-      seen_version = v;
-    }
-    servo_->Tick(have_sample ? &sample : nullptr, start, &result);
-    if (have_sample) {
-      const bool fresh = !result.timed_out;
-      if (was_fresh && !fresh) ++counters.device_timeouts;
-      was_fresh = fresh;
-    }
-    if (result.fault) {
-      ++counters.faults;
-      JournalEntry j;
-      j.tick = counters.ticks;
-      j.time_ns = start;
-      j.kind = JournalEntry::kFault;
-      journal_.Push(j);
-    }
-    counters.unanswered += result.unanswered;
-    counters.contacts_tracked += result.tracked;
-    counters.contacts_solved += result.solves;
-    counters.contacts_lost += result.lost;
-    if (result.answered) {
-      if (result.wrench.state == kTimeout) {
-        ++counters.timeout_wrenches;
-      } else {
-        counters.last_accepted = sample.accepted;
-      }
-      result.wrench.tick_end_ns = MonotonicNs();
-      if (!wrenches_.Push(result.wrench)) ++counters.wrenches_dropped;
-      // The eventfd only when the bridge is not watching the ring (Dekker pairing with
-      // set_consumer_watching(false) followed by a last look at the ring).
-      std::atomic_thread_fence(std::memory_order_seq_cst);
-      if (!consumer_watching_.load()) {
-        const uint64_t one = 1;
-        [[maybe_unused]] const ssize_t w = write(wake_fd_, &one, sizeof(one));
-      }
-      counters.force_norm = std::sqrt(result.wrench.force[0] * result.wrench.force[0] +
-                                      result.wrench.force[1] * result.wrench.force[1] +
-                                      result.wrench.force[2] * result.wrench.force[2]);
-      WindowMax::Raise(&window_.force, counters.force_norm);
-    }
-    WindowMax::Raise(&window_.violation, result.violation);
-    if (result.violation > options_.journal_violation) {
-      servo_->FillSnapshot(&snap);
-      JournalEntry j;
-      j.tick = counters.ticks;
-      j.time_ns = start;
-      j.kind = JournalEntry::kViolation;
-      j.violation = result.violation;
-      j.iterations = result.iterations;
-      j.contacts = snap.num_contacts;
-      j.min_beta = 0.0;
-      for (int k = 0; k < snap.num_contacts; ++k) {
-        j.min_beta = std::min(j.min_beta, snap.contacts[k].beta);
-      }
-      journal_.Push(j);
-    }
-    ++counters.ticks;
-    counters.early_ticks += early;
-    counters.iterations += result.iterations;
-    counters.max_violation = std::max(counters.max_violation, result.violation);
-    counters.num_contacts = result.num_contacts;
-    if ((counters.ticks & 3) == 0 || early) {
-      servo_->FillSnapshot(&snap);
-      snap.events_taken = counters.events_applied + counters.events_dropped;
-      snapshot_.Write(snap);
-    }
-    const int64_t end = MonotonicNs();
-    compute_.Add(1e-3 * static_cast<double>(end - start));
-    if (!early) {
-      if (end > next + period / 2) ++counters.late;
-      next += period;
-      if (end > next + period) {  // fell behind by more than a period: skip ahead
-        next = end + period;
-      }
-    }
+    Pace(&s, start, early);
     // Every tick (a ~200-byte copy, after the tick's timing): the statistics then agree with
     // the bridge's own counts (answers, unanswered, accepted) to within the states in flight.
-    counters_.Write(counters);
+    counters_.Write(s.counters);
   }
-  counters_.Write(counters);
+  counters_.Write(s.counters);
+}
+
+bool Engine::WaitForTick(ServoState* s) {
+  // Hybrid wait: sleep to just before the deadline (or the device's next state), then spin; a
+  // device state arriving meanwhile is answered at once.
+  bool early = false;
+  int64_t wake = s->next - s->spin;
+  if (options_.spin_for_device && s->device_period > 0) {
+    const int64_t expected = s->last_arrival + s->device_period;
+    if (MonotonicNs() < expected + s->device_lag) wake = std::min(wake, expected - s->device_lead);
+  }
+  if (wake > MonotonicNs()) {
+    servo_sleeping_.store(true);
+    const uint32_t bell = doorbell_.load();
+    if (device_.version() == s->seen_version) SleepUntilOrWoken(&doorbell_, bell, wake);
+    servo_sleeping_.store(false, std::memory_order_relaxed);
+    early = device_.version() != s->seen_version;
+  }
+  while (!early && MonotonicNs() < s->next) {
+    if (device_.version() != s->seen_version) return true;
+    CpuRelax();
+  }
+  return early;
+}
+
+void Engine::ApplyEvents(ServoState* s, int64_t start) {
+  while (events_.Pop(&s->event)) {
+    const ContactEventMsg& event = s->event;
+    const bool applied = servo_->Apply(event);
+    if (applied) {
+      ++s->counters.events_applied;
+    } else {
+      ++s->counters.events_dropped;
+    }
+    JournalEntry j;
+    j.tick = s->counters.ticks;
+    j.time_ns = start;
+    j.kind = applied ? JournalEntry::kEventApplied : JournalEntry::kEventDropped;
+    j.added = event.added;
+    j.surface_a = event.surface_a;
+    j.surface_b = event.surface_b;
+    for (int i = 0; i < 4; ++i) j.u[i] = event.u[i];
+    journal_.Push(j);
+  }
+}
+
+void Engine::ReadDevice(ServoState* s) {
+  const int64_t previous_arrival = s->have_sample ? s->sample.received_ns : 0;
+  const unsigned v = device_.Read(&s->sample);
+  if (v != 0 && v != s->seen_version) {
+    // The device's period: a running estimate of the gaps (a pause or a first state resets).
+    const int64_t gap = s->sample.received_ns - previous_arrival;
+    if (previous_arrival > 0 && gap > 0 && gap < 20'000'000) {
+      s->device_period = s->device_period > 0 ? (7 * s->device_period + gap) / 8 : gap;
+    } else {
+      s->device_period = 0;
+    }
+    s->last_arrival = s->sample.received_ns;
+  }
+  if (v != 0) {
+    s->have_sample = true;
+    s->seen_version = v;
+  }
+}
+
+void Engine::CountTick(ServoState* s, int64_t start) {
+  LoopCounters& c = s->counters;
+  const TickResult& r = s->result;
+  if (s->have_sample) {
+    const bool fresh = !r.timed_out;
+    if (s->was_fresh && !fresh) ++c.device_timeouts;
+    s->was_fresh = fresh;
+  }
+  if (r.fault) {
+    ++c.faults;
+    JournalEntry j;
+    j.tick = c.ticks;
+    j.time_ns = start;
+    j.kind = JournalEntry::kFault;
+    journal_.Push(j);
+  }
+  c.unanswered += r.unanswered;
+  c.contacts_tracked += r.tracked;
+  c.contacts_solved += r.solves;
+  c.contacts_lost += r.lost;
+  WindowMax::Raise(&window_.violation, r.violation);
+}
+
+void Engine::CloseTick(ServoState* s, bool early) {
+  LoopCounters& c = s->counters;
+  ++c.ticks;
+  c.early_ticks += early;
+  c.iterations += s->result.iterations;
+  c.max_violation = std::max(c.max_violation, s->result.violation);
+  c.num_contacts = s->result.num_contacts;
+}
+
+void Engine::SendWrench(ServoState* s) {
+  LoopCounters& c = s->counters;
+  WrenchSample& w = s->result.wrench;
+  if (w.state == kTimeout) {
+    ++c.timeout_wrenches;
+  } else {
+    c.last_accepted = s->sample.accepted;
+  }
+  w.tick_end_ns = MonotonicNs();
+  if (!wrenches_.Push(w)) ++c.wrenches_dropped;
+  // The eventfd only when the bridge is not watching the ring (Dekker pairing with
+  // set_consumer_watching(false) followed by a last look at the ring).
+  std::atomic_thread_fence(std::memory_order_seq_cst);
+  if (!consumer_watching_.load()) {
+    const uint64_t one = 1;
+    [[maybe_unused]] const ssize_t written = write(wake_fd_, &one, sizeof(one));
+  }
+  c.force_norm =
+      std::sqrt(w.force[0] * w.force[0] + w.force[1] * w.force[1] + w.force[2] * w.force[2]);
+  WindowMax::Raise(&window_.force, c.force_norm);
+}
+
+void Engine::JournalViolation(ServoState* s, int64_t start) {
+  servo_->FillSnapshot(&s->snap);
+  JournalEntry j;
+  j.tick = s->counters.ticks;
+  j.time_ns = start;
+  j.kind = JournalEntry::kViolation;
+  j.violation = s->result.violation;
+  j.iterations = s->result.iterations;
+  j.contacts = s->snap.num_contacts;
+  j.min_beta = 0.0;
+  for (int k = 0; k < s->snap.num_contacts; ++k) {
+    j.min_beta = std::min(j.min_beta, s->snap.contacts[k].beta);
+  }
+  journal_.Push(j);
+}
+
+void Engine::Pace(ServoState* s, int64_t start, bool early) {
+  const int64_t end = MonotonicNs();
+  compute_.Add(1e-3 * static_cast<double>(end - start));
+  if (early) return;  // an early tick answered a device state; the deadline stands
+  if (end > s->next + s->period / 2) ++s->counters.late;
+  s->next += s->period;
+  if (end > s->next + s->period) s->next = end + s->period;  // fell behind: skip ahead
 }
 
 void Engine::GlobalThread() {

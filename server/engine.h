@@ -152,7 +152,17 @@ class Engine {
   const EngineOptions& options() const { return options_; }
 
  private:
+  // The servo thread's loop, one named step per concern (engine.cc).
+  struct ServoState;
   void ServoThread();
+  bool WaitForTick(ServoState* s);  ///< true: woken early by a device state
+  void ApplyEvents(ServoState* s, int64_t start);
+  void ReadDevice(ServoState* s);
+  void CountTick(ServoState* s, int64_t start);
+  void SendWrench(ServoState* s);
+  void JournalViolation(ServoState* s, int64_t start);
+  void CloseTick(ServoState* s, bool early);
+  void Pace(ServoState* s, int64_t start, bool early);
   void GlobalThread();
 
   EngineOptions options_;
