@@ -34,305 +34,344 @@ std::unique_ptr<lcm::LCM> OpenLcm(const std::string& url) {
   return lcm;
 }
 
-struct Bridge::Impl {
-  Engine* engine;
-  Channels ch;
-  std::FILE* log;
-  bool status;
-  std::unique_ptr<lcm::LCM> lcm;
-  std::unique_ptr<LcmSubscriptions> subs;
-  DeviceFilter filter;
-  tangent::device_state_t device_msg;
-  BridgeSummary* summary;
-  std::vector<uint64_t> window_prev, window_now, window;
-  int64_t last_ticks = 0;
-  int64_t last_stats_ns = 0;
-  int64_t stats_period_ns = 1000000000LL;
-  int64_t start_ns = 0;
-  tangent::wrench_t wrench;
-  tangent::contact_states_t contacts;
-  tangent::scene_state_t scene_msg;
-  tangent::loop_stats_t stats;
-  Snapshot snap;
-  // The server's share of each round trip: receipt → the answering tick's start (waiting for
-  // the servo), the tick, its end → the wrench published (hand-off to this thread and LCM).
-  DurationHistogram waited, computed, handed;
-  bool awaiting = false;  ///< a device state was handed to the servo and is not answered yet
-  int64_t awaited_seq = -1;
-  double answer_wait_us = 300.0;
+namespace {
 
-  /// Waits (spinning, bounded by answer_wait_us) for the answer to the device state just handed
+/// Whether a packet starts with the fingerprint of another Tangent message type.
+bool IsOtherTangentType(const void* data) {
+  int64_t hash = 0;
+  const auto* b = static_cast<const uint8_t*>(data);
+  for (int i = 0; i < 8; ++i)
+    hash = static_cast<int64_t>((static_cast<uint64_t>(hash) << 8) | b[i]);
+  const int64_t others[] = {tangent::wrench_t::getHash(), tangent::loop_stats_t::getHash(),
+                            tangent::scene_state_t::getHash(),
+                            tangent::contact_states_t::getHash()};
+  for (int64_t h : others) {
+    if (hash == h) return true;
+  }
+  return false;
+}
+
+DeviceFilterOptions FilterOptions(const DeviceSpec& device, const BridgeOptions& options) {
+  DeviceFilterOptions fo;
+  fo.device_id = options.device_id;
+  for (int i = 0; i < 3; ++i) {
+    fo.workspace_min[i] = device.workspace_min[i];
+    fo.workspace_max[i] = device.workspace_max[i];
+  }
+  return fo;
+}
+
+/// The loop statistics message from the servo's counters and the bridge's own counts (the
+/// window fields — rate, compute quantiles, window maxima — are filled by the caller).
+void FillLoopStats(const LoopCounters& c, const DeviceFilterCounts& f, const BridgeSummary& b,
+                   tangent::loop_stats_t* stats) {
+  stats->ticks = c.ticks;
+  stats->overruns = c.overruns;
+  stats->iterations_mean =
+      c.ticks > 0 ? static_cast<double>(c.iterations) / static_cast<double>(c.ticks) : 0.0;
+  stats->max_violation_total = c.max_violation;
+  stats->num_contacts = c.num_contacts;
+  stats->force_norm = c.force_norm;
+  stats->device_messages = f.accepted;
+  stats->sessions = f.sessions;
+  stats->undecodable = b.undecodable;
+  stats->wrong_type = b.wrong_type;
+  stats->lost_before_filter = f.lost;
+  stats->unanswered = c.unanswered;
+  stats->rejected_non_finite = f.non_finite;
+  stats->rejected_quaternion = f.quaternion;
+  stats->rejected_workspace = f.workspace;
+  stats->rejected_device = f.device;
+  stats->rejected_session = f.session;
+  stats->rejected_sequence = f.sequence;
+  stats->rejected_jump = f.jump;
+  stats->device_timeouts = c.device_timeouts;
+  stats->faults = c.faults;
+  stats->wrenches_sent = b.wrenches_sent;
+  stats->contact_events = c.events_applied;
+  stats->events_dropped = c.events_dropped;
+  stats->contacts_tracked = c.contacts_tracked;
+  stats->contacts_solved = c.contacts_solved;
+  stats->contacts_lost = c.contacts_lost;
+}
+
+}  // namespace
+
+/// The bridge thread's state and its steps: receive (device states, pings), answer (wrenches),
+/// publish for viewers (scene, contacts, statistics) and log (journal, status line).
+class Bridge::Impl {
+ public:
+  Impl(Engine* engine, const std::string& url, const Channels& channels, std::FILE* log,
+       bool status_line, const BridgeOptions& options, BridgeSummary* summary)
+      : engine_(engine),
+        ch_(channels),
+        log_(log),
+        status_(status_line),
+        lcm_(OpenLcm(url)),
+        filter_(FilterOptions(engine->servo().scene().device, options)),
+        summary_(summary),
+        window_prev_(DurationHistogram::kBins + 1, 0),
+        window_now_(DurationHistogram::kBins + 1, 0),
+        window_(DurationHistogram::kBins + 1, 0),
+        stats_period_ns_(static_cast<int64_t>(1e9 / options.stats_rate_hz)) {
+    subs_ = std::make_unique<LcmSubscriptions>(lcm_.get());
+    subs_->Raw(channels.device,
+               [this](const void* data, uint32_t size) { OnDevicePacket(data, size); });
+    subs_->Raw(channels.ping, [this](const void* data, uint32_t size) { OnPing(data, size); });
+  }
+
+  void Run(const std::atomic<bool>& stop, double duration_s) {
+    start_ns_ = MonotonicNs();
+    last_stats_ns_ = start_ns_;
+    int64_t next_scene = start_ns_, next_stats = start_ns_ + stats_period_ns_;
+    pollfd fds[2] = {{lcm_->getFileno(), POLLIN, 0}, {engine_->wake_fd(), POLLIN, 0}};
+    while (!stop.load()) {
+      const int64_t now = MonotonicNs();
+      if (duration_s > 0 && now - start_ns_ > static_cast<int64_t>(duration_s * 1e9)) break;
+      const int64_t until = std::min(next_scene, next_stats) - now;
+      WaitForTraffic(fds, static_cast<int>(std::clamp<int64_t>(until / 1000000, 0, 10)));
+      if (awaiting_) AwaitAnswer();
+      const int64_t t = MonotonicNs();
+      if (t >= next_scene) {
+        PublishScene(t);
+        next_scene = t + kScenePeriodNs;
+      }
+      if (t >= next_scene || t >= next_stats) DrainJournal();
+      if (t >= next_stats) {
+        PublishStats(t);
+        next_stats += stats_period_ns_;
+        if (next_stats < t) next_stats = t + stats_period_ns_;
+      }
+    }
+    PublishWrenches();
+    if (status_) std::fprintf(stderr, "\n");
+    summary_->filter = filter_.counts();
+  }
+
+  const DeviceFilterCounts& filter_counts() const { return filter_.counts(); }
+
+  /// Accepted device states never answered (final: call after the engine stopped).
+  int64_t Unanswered(const LoopCounters& c) const {
+    // The servo counts the accepted states it skipped between two answers; those after its last
+    // answer (at most the one in the mailbox when the engine stopped) are unanswered too.
+    const int64_t accepted = filter_.counts().accepted;
+    return c.unanswered + std::max<int64_t>(0, accepted - std::max<int64_t>(c.last_accepted, 0));
+  }
+
+  std::string Report() const;
+
+ private:
+  static constexpr int64_t kScenePeriodNs = 33'000'000;  ///< scene and contacts at ~30 Hz
+
+  /// Waits up to timeout_ms for a packet or the servo's eventfd; publishes the wrenches the
+  /// servo has pushed and handles every packet waiting.
+  void WaitForTraffic(pollfd* fds, int timeout_ms) {
+    fds[0].revents = fds[1].revents = 0;
+    poll(fds, 2, timeout_ms);
+    if (fds[1].revents & POLLIN) {
+      uint64_t count;
+      [[maybe_unused]] const ssize_t r = read(engine_->wake_fd(), &count, sizeof(count));
+    }
+    PublishWrenches();
+    if (fds[0].revents & POLLIN) {
+      while (lcm_->handleTimeout(0) > 0) PublishWrenches();
+    }
+  }
+
+  /// Waits (spinning, bounded by answer_wait_us_) for the answer to the device state just handed
   /// to the servo and publishes it at once: a second wake-up of this thread through the eventfd
   /// costs ~40 µs here (measured: answer_handoff p50 42 µs). Messages arriving meanwhile are
   /// handled too (a ping is not kept waiting behind the spin).
   void AwaitAnswer() {
-    const int64_t until = MonotonicNs() + static_cast<int64_t>(answer_wait_us * 1e3);
-    engine->set_consumer_watching(true);
-    pollfd fd{lcm->getFileno(), POLLIN, 0};
-    while (awaiting && MonotonicNs() < until) {
+    const int64_t until = MonotonicNs() + static_cast<int64_t>(answer_wait_us_ * 1e3);
+    engine_->set_consumer_watching(true);
+    pollfd fd{lcm_->getFileno(), POLLIN, 0};
+    while (awaiting_ && MonotonicNs() < until) {
       PublishWrenches();
       fd.revents = 0;
-      if (poll(&fd, 1, 0) > 0) lcm->handleTimeout(0);
+      if (poll(&fd, 1, 0) > 0) lcm_->handleTimeout(0);
     }
-    engine->set_consumer_watching(false);
+    engine_->set_consumer_watching(false);
     std::atomic_thread_fence(std::memory_order_seq_cst);
     PublishWrenches();  // (pushed after the last look, before the servo saw the flag cleared)
-    awaiting = false;
+    awaiting_ = false;
   }
 
   /// Every packet on the device channel: decoded here (not by LCM's typed handler, which only
   /// prints a failure) so that undecodable and wrong-type packets are counted.
   void OnDevicePacket(const void* data, uint32_t size) {
-    if (device_msg.decode(data, 0, static_cast<int>(size)) < 0) {
-      ++summary->undecodable;
-      if (size >= 8 && IsOtherTangentType(data)) ++summary->wrong_type;
+    if (device_msg_.decode(data, 0, static_cast<int>(size)) < 0) {
+      ++summary_->undecodable;
+      if (size >= 8 && IsOtherTangentType(data)) ++summary_->wrong_type;
       return;
     }
-    OnDevice(device_msg);
-  }
-
-  /// Whether a packet starts with the fingerprint of another Tangent message type.
-  static bool IsOtherTangentType(const void* data) {
-    int64_t hash = 0;
-    const auto* b = static_cast<const uint8_t*>(data);
-    for (int i = 0; i < 8; ++i)
-      hash = static_cast<int64_t>((static_cast<uint64_t>(hash) << 8) | b[i]);
-    const int64_t others[] = {tangent::wrench_t::getHash(), tangent::loop_stats_t::getHash(),
-                              tangent::scene_state_t::getHash(),
-                              tangent::contact_states_t::getHash()};
-    for (int64_t h : others) {
-      if (hash == h) return true;
-    }
-    return false;
-  }
-
-  void OnDevice(const tangent::device_state_t& m) {
     const int64_t received = MonotonicNs();
-    const DeviceFilter::Verdict v = filter.Check(ToReading(m), received);
+    const DeviceFilter::Verdict v = filter_.Check(ToReading(device_msg_), received);
     if (!DeviceFilter::Accepted(v)) return;
-    engine->Publish(ToSample(m, filter.session_index(), filter.counts().accepted, received));
-    awaiting = true;
-    awaited_seq = m.seq;
-  }
-  void OnPing(const void* data, uint32_t size) {
-    lcm->publish(ch.pong, data, size);
-    ++summary->pings;
+    engine_->Publish(
+        ToSample(device_msg_, filter_.session_index(), filter_.counts().accepted, received));
+    awaiting_ = true;
+    awaited_seq_ = device_msg_.seq;
   }
 
-  /// Publishes the wrenches the servo has pushed; clears `awaiting` when the awaited one went.
+  void OnPing(const void* data, uint32_t size) {
+    lcm_->publish(ch_.pong, data, size);
+    ++summary_->pings;
+  }
+
+  /// Publishes the wrenches the servo has pushed; clears `awaiting_` when the awaited one went.
   void PublishWrenches() {
     WrenchSample w;
-    while (engine->wrenches().Pop(&w)) {
-      if (w.seq >= awaited_seq) awaiting = false;
-      ToWrenchMsg(w, &wrench);
-      lcm->publish(ch.wrench, &wrench);
-      ++summary->wrenches_sent;
+    while (engine_->wrenches().Pop(&w)) {
+      if (w.seq >= awaited_seq_) awaiting_ = false;
+      ToWrenchMsg(w, &wrench_);
+      lcm_->publish(ch_.wrench, &wrench_);
+      ++summary_->wrenches_sent;
       // Where the server's share of the round trip goes.
       const int64_t sent = MonotonicNs();
-      waited.Add(1e-3 * static_cast<double>(w.tick_start_ns - w.received_ns));
-      computed.Add(1e-3 * static_cast<double>(w.tick_end_ns - w.tick_start_ns));
-      handed.Add(1e-3 * static_cast<double>(sent - w.tick_end_ns));
+      waited_.Add(1e-3 * static_cast<double>(w.tick_start_ns - w.received_ns));
+      computed_.Add(1e-3 * static_cast<double>(w.tick_end_ns - w.tick_start_ns));
+      handed_.Add(1e-3 * static_cast<double>(sent - w.tick_end_ns));
     }
   }
 
   void PublishScene(int64_t now) {
-    engine->snapshot().Read(&snap);
-    const Scene& sc = engine->servo().scene();
-    ToContactStates(snap, now / 1000, &contacts);
-    lcm->publish(ch.contacts, &contacts);
-    ToSceneState(snap, sc, now / 1000, &scene_msg);
-    lcm->publish(ch.scene, &scene_msg);
+    engine_->snapshot().Read(&snap_);
+    ToContactStates(snap_, now / 1000, &contacts_);
+    lcm_->publish(ch_.contacts, &contacts_);
+    ToSceneState(snap_, engine_->servo().scene(), now / 1000, &scene_msg_);
+    lcm_->publish(ch_.scene, &scene_msg_);
   }
 
   /// The servo's journal into the log file (contact events, violation excursions).
   void DrainJournal() {
     JournalEntry j;
     char line[200];
-    while (engine->journal().Pop(&j)) {
-      if (!log) continue;
-      FormatJournalEntry(j, start_ns, line, sizeof(line));
-      std::fprintf(log, "%s\n", line);
+    while (engine_->journal().Pop(&j)) {
+      if (!log_) continue;
+      FormatJournalEntry(j, start_ns_, line, sizeof(line));
+      std::fprintf(log_, "%s\n", line);
     }
   }
 
   void PublishStats(int64_t now) {
     LoopCounters c;
-    engine->counters().Read(&c);
-    engine->compute_histogram().Copy(window_now.data());
-    for (size_t b = 0; b < window.size(); ++b) window[b] = window_now[b] - window_prev[b];
-    window_prev.swap(window_now);
-    const double seconds = 1e-9 * static_cast<double>(now - last_stats_ns);
-    stats.utime = now / 1000;
-    stats.loop_rate_hz = seconds > 0 ? static_cast<double>(c.ticks - last_ticks) / seconds : 0.0;
-    last_ticks = c.ticks;
-    last_stats_ns = now;
-    stats.ticks = c.ticks;
-    stats.overruns = c.overruns;
-    stats.compute_p50_us = DurationHistogram::Quantile(window.data(), 0.5);
-    stats.compute_p99_us = DurationHistogram::Quantile(window.data(), 0.99);
-    stats.compute_max_us = DurationHistogram::Quantile(window.data(), 1.0);
-    stats.iterations_mean =
-        c.ticks > 0 ? static_cast<double>(c.iterations) / static_cast<double>(c.ticks) : 0.0;
-    engine->TakeWindowMax(&stats.max_violation, &stats.max_force_window);
-    stats.max_violation_total = c.max_violation;
-    stats.num_contacts = c.num_contacts;
-    stats.force_norm = c.force_norm;
-    const DeviceFilterCounts& f = filter.counts();
-    stats.device_messages = f.accepted;
-    stats.sessions = f.sessions;
-    stats.undecodable = summary->undecodable;
-    stats.wrong_type = summary->wrong_type;
-    stats.lost_before_filter = f.lost;
-    stats.unanswered = c.unanswered;
-    stats.rejected_non_finite = f.non_finite;
-    stats.rejected_quaternion = f.quaternion;
-    stats.rejected_workspace = f.workspace;
-    stats.rejected_device = f.device;
-    stats.rejected_session = f.session;
-    stats.rejected_sequence = f.sequence;
-    stats.rejected_jump = f.jump;
-    stats.device_timeouts = c.device_timeouts;
-    stats.faults = c.faults;
-    stats.wrenches_sent = summary->wrenches_sent;
-    stats.global_passes = engine->global_passes();
-    stats.global_pass_us = engine->global_histogram().max();
-    stats.contact_events = c.events_applied;
-    stats.events_dropped = c.events_dropped;
-    stats.contacts_tracked = c.contacts_tracked;
-    stats.contacts_solved = c.contacts_solved;
-    stats.contacts_lost = c.contacts_lost;
-    lcm->publish(ch.stats, &stats);
+    engine_->counters().Read(&c);
+    engine_->compute_histogram().Copy(window_now_.data());
+    for (size_t b = 0; b < window_.size(); ++b) window_[b] = window_now_[b] - window_prev_[b];
+    window_prev_.swap(window_now_);
+    const double seconds = 1e-9 * static_cast<double>(now - last_stats_ns_);
+    FillLoopStats(c, filter_.counts(), *summary_, &stats_);
+    stats_.utime = now / 1000;
+    stats_.loop_rate_hz = seconds > 0 ? static_cast<double>(c.ticks - last_ticks_) / seconds : 0.0;
+    last_ticks_ = c.ticks;
+    last_stats_ns_ = now;
+    stats_.compute_p50_us = DurationHistogram::Quantile(window_.data(), 0.5);
+    stats_.compute_p99_us = DurationHistogram::Quantile(window_.data(), 0.99);
+    stats_.compute_max_us = DurationHistogram::Quantile(window_.data(), 1.0);
+    engine_->TakeWindowMax(&stats_.max_violation, &stats_.max_force_window);
+    stats_.global_passes = engine_->global_passes();
+    stats_.global_pass_us = engine_->global_histogram().max();
+    lcm_->publish(ch_.stats, &stats_);
+    WriteStatusLine(now, c);
+  }
+
+  void WriteStatusLine(int64_t now, const LoopCounters& c) {
+    const DeviceFilterCounts& f = filter_.counts();
     char line[256];
     std::snprintf(line, sizeof(line),
                   "t=%.1fs rate=%.0fHz compute p50=%.1fus p99=%.1fus contacts=%d force=%.2fN "
                   "iter=%.2f violation=%.1e accepted=%lld rejected=%lld timeouts=%lld",
-                  1e-9 * static_cast<double>(now - start_ns), stats.loop_rate_hz,
-                  stats.compute_p50_us, stats.compute_p99_us, stats.num_contacts, stats.force_norm,
-                  stats.iterations_mean, stats.max_violation, static_cast<long long>(f.accepted),
-                  static_cast<long long>(f.rejected()), static_cast<long long>(c.device_timeouts));
-    if (log) {
-      std::fprintf(log, "%s\n", line);
-      std::fflush(log);
+                  1e-9 * static_cast<double>(now - start_ns_), stats_.loop_rate_hz,
+                  stats_.compute_p50_us, stats_.compute_p99_us, stats_.num_contacts,
+                  stats_.force_norm, stats_.iterations_mean, stats_.max_violation,
+                  static_cast<long long>(f.accepted), static_cast<long long>(f.rejected()),
+                  static_cast<long long>(c.device_timeouts));
+    if (log_) {
+      std::fprintf(log_, "%s\n", line);
+      std::fflush(log_);
     }
-    if (status) std::fprintf(stderr, "\r%s", line);
+    if (status_) std::fprintf(stderr, "\r%s", line);
   }
+
+  Engine* engine_;
+  Channels ch_;
+  std::FILE* log_;
+  bool status_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<LcmSubscriptions> subs_;
+  DeviceFilter filter_;
+  BridgeSummary* summary_;
+  // Message buffers (reused: the bridge's loop does not allocate per message).
+  tangent::device_state_t device_msg_;
+  tangent::wrench_t wrench_;
+  tangent::contact_states_t contacts_;
+  tangent::scene_state_t scene_msg_;
+  tangent::loop_stats_t stats_;
+  Snapshot snap_;
+  // The compute histogram at the last statistics message and now; their difference, the window.
+  std::vector<uint64_t> window_prev_, window_now_, window_;
+  int64_t stats_period_ns_;
+  int64_t last_ticks_ = 0;
+  int64_t last_stats_ns_ = 0;
+  int64_t start_ns_ = 0;
+  // The server's share of each round trip: receipt → the answering tick's start (waiting for
+  // the servo), the tick, its end → the wrench published (hand-off to this thread and LCM).
+  DurationHistogram waited_, computed_, handed_;
+  bool awaiting_ = false;  ///< a device state was handed to the servo and is not answered yet
+  int64_t awaited_seq_ = -1;
+  double answer_wait_us_ = 300.0;
 };
 
 Bridge::Bridge(Engine* engine, const std::string& url, const Channels& channels, std::FILE* log,
                bool status_line, const BridgeOptions& options)
-    : impl_(std::make_unique<Impl>()) {
-  Impl& m = *impl_;
-  const DeviceSpec& dv = engine->servo().scene().device;
-  DeviceFilterOptions fo;
-  fo.device_id = options.device_id;
-  for (int i = 0; i < 3; ++i) {
-    fo.workspace_min[i] = dv.workspace_min[i];
-    fo.workspace_max[i] = dv.workspace_max[i];
-  }
-  m.filter = DeviceFilter(fo);
-  m.stats_period_ns = static_cast<int64_t>(1e9 / options.stats_rate_hz);
-  m.engine = engine;
-  m.ch = channels;
-  m.log = log;
-  m.status = status_line;
-  m.summary = &summary_;
-  m.lcm = OpenLcm(url);
-  m.subs = std::make_unique<LcmSubscriptions>(m.lcm.get());
-  m.subs->Raw(channels.device,
-              [&m](const void* data, uint32_t size) { m.OnDevicePacket(data, size); });
-  m.subs->Raw(channels.ping, [&m](const void* data, uint32_t size) { m.OnPing(data, size); });
-  m.window_prev.assign(DurationHistogram::kBins + 1, 0);
-  m.window_now.assign(DurationHistogram::kBins + 1, 0);
-  m.window.assign(DurationHistogram::kBins + 1, 0);
-}
+    : impl_(std::make_unique<Impl>(engine, url, channels, log, status_line, options, &summary_)) {}
 
 Bridge::~Bridge() = default;
 
-void Bridge::Run(const std::atomic<bool>& stop, double duration_s) {
-  Impl& m = *impl_;
-  m.start_ns = MonotonicNs();
-  m.last_stats_ns = m.start_ns;
-  int64_t next_scene = m.start_ns, next_stats = m.start_ns + m.stats_period_ns;
-  pollfd fds[2] = {{m.lcm->getFileno(), POLLIN, 0}, {m.engine->wake_fd(), POLLIN, 0}};
-  while (!stop.load()) {
-    const int64_t now = MonotonicNs();
-    if (duration_s > 0 && now - m.start_ns > static_cast<int64_t>(duration_s * 1e9)) break;
-    const int64_t until = std::min(next_scene, next_stats) - now;
-    const int timeout_ms = static_cast<int>(std::clamp<int64_t>(until / 1000000, 0, 10));
-    fds[0].revents = fds[1].revents = 0;
-    poll(fds, 2, timeout_ms);
-    if (fds[1].revents & POLLIN) {
-      uint64_t count;
-      [[maybe_unused]] const ssize_t r = read(m.engine->wake_fd(), &count, sizeof(count));
-    }
-    m.PublishWrenches();
-    if (fds[0].revents & POLLIN) {
-      while (m.lcm->handleTimeout(0) > 0) {
-        m.PublishWrenches();
-      }
-    }
-    if (m.awaiting) m.AwaitAnswer();
-    const int64_t t = MonotonicNs();
-    if (t >= next_scene) {
-      m.PublishScene(t);
-      next_scene = t + 33000000LL;
-    }
-    if (t >= next_scene || t >= next_stats) m.DrainJournal();
-    if (t >= next_stats) {
-      m.PublishStats(t);
-      next_stats += m.stats_period_ns;
-      if (next_stats < t) next_stats = t + m.stats_period_ns;
-    }
-  }
-  m.PublishWrenches();
-  if (m.status) std::fprintf(stderr, "\n");
-  summary_.filter = m.filter.counts();
-}
+void Bridge::Run(const std::atomic<bool>& stop, double duration_s) { impl_->Run(stop, duration_s); }
 
-int64_t Bridge::Unanswered(const LoopCounters& c) const {
-  // The servo counts the accepted states it skipped between two answers; those after its last
-  // answer (at most the one in the mailbox when the engine stopped) are unanswered too.
-  const int64_t accepted = impl_->filter.counts().accepted;
-  return c.unanswered + std::max<int64_t>(0, accepted - std::max<int64_t>(c.last_accepted, 0));
-}
+int64_t Bridge::Unanswered(const LoopCounters& c) const { return impl_->Unanswered(c); }
 
-std::string Bridge::Report() const {
-  const Impl& m = *impl_;
+std::string Bridge::Report() const { return impl_->Report(); }
+
+std::string Bridge::Impl::Report() const {
   LoopCounters c;
-  m.engine->counters().Read(&c);
+  engine_->counters().Read(&c);
   std::vector<uint64_t> h(DurationHistogram::kBins + 1), g(DurationHistogram::kBins + 1);
-  m.engine->compute_histogram().Copy(h.data());
-  m.engine->global_histogram().Copy(g.data());
-  const DeviceFilterCounts& f = m.filter.counts();
+  engine_->compute_histogram().Copy(h.data());
+  engine_->global_histogram().Copy(g.data());
+  const DeviceFilterCounts& f = filter_.counts();
+  const BridgeSummary& b = *summary_;
   std::ostringstream s;
-  const double seconds = 1e-9 * static_cast<double>(MonotonicNs() - m.start_ns);
+  const double seconds = 1e-9 * static_cast<double>(MonotonicNs() - start_ns_);
   s << "ticks=" << c.ticks << "\nrate_hz=" << static_cast<double>(c.ticks) / seconds
     << "\nearly_ticks=" << c.early_ticks
     << "\ncompute_p50_us=" << DurationHistogram::Quantile(h.data(), 0.5)
     << "\ncompute_p99_us=" << DurationHistogram::Quantile(h.data(), 0.99)
     << "\ncompute_p999_us=" << DurationHistogram::Quantile(h.data(), 0.999)
-    << "\ncompute_max_us=" << m.engine->compute_histogram().max() << "\noverruns=" << c.overruns
+    << "\ncompute_max_us=" << engine_->compute_histogram().max() << "\noverruns=" << c.overruns
     << "\nlate=" << c.late << "\niterations_mean="
     << (c.ticks ? static_cast<double>(c.iterations) / static_cast<double>(c.ticks) : 0.0)
     << "\ncontacts=" << c.num_contacts << "\nmax_violation=" << c.max_violation
     << "\ndevice_messages=" << f.accepted << "\nsessions=" << f.sessions
-    << "\nundecodable=" << summary_.undecodable << "\nwrong_type=" << summary_.wrong_type
+    << "\nundecodable=" << b.undecodable << "\nwrong_type=" << b.wrong_type
     << "\nlost_before_filter=" << f.lost << "\nunanswered=" << Unanswered(c)
     << "\nrejected_non_finite=" << f.non_finite << "\nrejected_quaternion=" << f.quaternion
     << "\nrejected_workspace=" << f.workspace << "\nrejected_device=" << f.device
     << "\nrejected_session=" << f.session << "\nrejected_sequence=" << f.sequence
     << "\nrejected_jump=" << f.jump << "\ndevice_timeouts=" << c.device_timeouts
-    << "\nfaults=" << c.faults << "\nwrenches_sent=" << summary_.wrenches_sent
+    << "\nfaults=" << c.faults << "\nwrenches_sent=" << b.wrenches_sent
     << "\ntimeout_wrenches=" << c.timeout_wrenches << "\nwrenches_dropped=" << c.wrenches_dropped
-    << "\nglobal_passes=" << m.engine->global_passes()
+    << "\nglobal_passes=" << engine_->global_passes()
     << "\nglobal_pass_p50_us=" << DurationHistogram::Quantile(g.data(), 0.5)
-    << "\nglobal_pass_max_us=" << m.engine->global_histogram().max()
+    << "\nglobal_pass_max_us=" << engine_->global_histogram().max()
     << "\ncontact_events=" << c.events_applied << "\nevents_dropped=" << c.events_dropped
     << "\ncontacts_tracked=" << c.contacts_tracked << "\ncontacts_solved=" << c.contacts_solved
-    << "\ncontacts_lost=" << c.contacts_lost << "\npings_answered=" << summary_.pings;
+    << "\ncontacts_lost=" << c.contacts_lost << "\npings_answered=" << b.pings;
   std::vector<uint64_t> d(DurationHistogram::kBins + 1);
   const std::pair<const char*, const DurationHistogram*> shares[] = {
-      {"answer_wait", &m.waited}, {"answer_tick", &m.computed}, {"answer_handoff", &m.handed}};
+      {"answer_wait", &waited_}, {"answer_tick", &computed_}, {"answer_handoff", &handed_}};
   for (const auto& [name, hist] : shares) {
     hist->Copy(d.data());
     s << "\n"

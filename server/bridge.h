@@ -69,11 +69,10 @@ class Bridge {
   /// Accepted device states never answered (final: call after the engine stopped).
   int64_t Unanswered(const LoopCounters& c) const;
 
-  struct Impl;
-
  private:
+  class Impl;
+  BridgeSummary summary_;  // (before impl_: the Impl holds a pointer to it)
   std::unique_ptr<Impl> impl_;
-  BridgeSummary summary_;
 };
 
 }  // namespace tangent::server
