@@ -113,10 +113,7 @@ struct Receiver {
   }
 };
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"tangent-phantom: simulated PHANToM client for tangentd"};
+struct PhantomOptions {
   std::string url = "udpm://239.255.76.68:7668?ttl=0", trajectory = "drag", csv_log;
   std::string device_ch = "TANGENT_DEVICE", wrench_ch = "TANGENT_WRENCH",
               stats_ch = "TANGENT_STATS";
@@ -128,97 +125,95 @@ int main(int argc, char** argv) {
   int inject_bad = 0;
   bool status = false;
   tangent::server::DeviceModelOptions dm;
-  app.add_option("--lcm-url", url, "LCM URL");
-  app.add_option("--trajectory", trajectory,
-                 "built-in hand trajectory (drag, circle, pull, hold) or a CSV file t,x,y,z");
-  app.add_option("--duration", duration, "seconds")->check(CLI::Range(0.1, 3600.0));
-  app.add_option("--rate", rate, "device rate, Hz")->check(CLI::Range(10.0, 10000.0));
-  app.add_option("--ping-rate", ping_rate, "bare LCM ping-pong rate, Hz (0: off)");
-  app.add_option("--log", csv_log, "CSV log of every device step");
-  app.add_option("--coupling-stiffness", coupling_stiffness,
-                 "the server's coupling stiffness (N/m), for the passivity bound");
-  app.add_option("--silence-at", silence_at, "stop publishing at this time (s; timeout test)");
-  app.add_option("--silence-for", silence_for, "... for this long (s)");
-  app.add_option(
-      "--inject-bad", inject_bad,
+};
+
+void AddOptions(CLI::App* app, PhantomOptions* o) {
+  app->add_option("--lcm-url", o->url, "LCM URL");
+  app->add_option("--trajectory", o->trajectory,
+                  "built-in hand trajectory (drag, circle, pull, hold) or a CSV file t,x,y,z");
+  app->add_option("--duration", o->duration, "seconds")->check(CLI::Range(0.1, 3600.0));
+  app->add_option("--rate", o->rate, "device rate, Hz")->check(CLI::Range(10.0, 10000.0));
+  app->add_option("--ping-rate", o->ping_rate, "bare LCM ping-pong rate, Hz (0: off)");
+  app->add_option("--log", o->csv_log, "CSV log of every device step");
+  app->add_option("--coupling-stiffness", o->coupling_stiffness,
+                  "the server's coupling stiffness (N/m), for the passivity bound");
+  app->add_option("--silence-at", o->silence_at, "stop publishing at this time (s; timeout test)");
+  app->add_option("--silence-for", o->silence_for, "... for this long (s)");
+  app->add_option(
+      "--inject-bad", o->inject_bad,
       "every N-th message is bad (NaN, non-unit quaternion, repeated seq, jump, outside the "
       "workspace in turn)");
-  app.add_option("--device-id", device_id, "this device's id (device_state_t.device_id)");
-  app.add_option("--session", session,
-                 "session nonce (default: drawn at random at start; a new one takes over)");
-  app.add_option("--watchdog-ms", watchdog_ms,
-                 "no wrench for this long: the device ramps its own force to zero, ms")
+  app->add_option("--device-id", o->device_id, "this device's id (device_state_t.device_id)");
+  app->add_option("--session", o->session,
+                  "session nonce (default: drawn at random at start; a new one takes over)");
+  app->add_option("--watchdog-ms", o->watchdog_ms,
+                  "no wrench for this long: the device ramps its own force to zero, ms")
       ->check(CLI::Range(1.0, 10000.0));
-  app.add_option("--watchdog-rate", watchdog_rate, "... at this rate, N/s")
+  app->add_option("--watchdog-rate", o->watchdog_rate, "... at this rate, N/s")
       ->check(CLI::Range(1.0, 1e6));
-  app.add_option("--device-channel", device_ch);
-  app.add_option("--wrench-channel", wrench_ch);
-  app.add_option("--stats-channel", stats_ch);
-  app.add_option("--mass", dm.mass, "device apparent mass, kg");
-  app.add_option("--max-force", dm.max_force, "device force saturation, N");
-  app.add_option("--hand-stiffness", dm.hand_stiffness, "N/m");
-  app.add_option("--hand-damping", dm.hand_damping, "N s/m");
-  app.add_flag("--status", status, "live one-line status with a progress bar");
-  CLI11_PARSE(app, argc, argv);
+  app->add_option("--device-channel", o->device_ch);
+  app->add_option("--wrench-channel", o->wrench_ch);
+  app->add_option("--stats-channel", o->stats_ch);
+  app->add_option("--mass", o->dm.mass, "device apparent mass, kg");
+  app->add_option("--max-force", o->dm.max_force, "device force saturation, N");
+  app->add_option("--hand-stiffness", o->dm.hand_stiffness, "N/m");
+  app->add_option("--hand-damping", o->dm.hand_damping, "N s/m");
+  app->add_flag("--status", o->status, "live one-line status with a progress bar");
+}
 
-  HandTrajectory hand;
-  try {
-    std::ifstream f(trajectory);
-    if (f) {
-      std::stringstream text;
-      text << f.rdbuf();
-      hand = HandTrajectory::FromCsv(text.str(), trajectory);
-    } else {
-      hand = HandTrajectory::BuiltIn(trajectory);
-    }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tangent-phantom: %s\n", e.what());
-    return 2;
-  }
-  lcm::LCM lcm(url);
-  if (!lcm.good()) {
-    std::fprintf(stderr,
-                 "tangent-phantom: LCM could not start on \"%s\" (multicast not routed?). Fix, as "
-                 "root: ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo\n",
-                 url.c_str());
-    return 3;
-  }
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
-  if (session == 0) {
-    std::random_device entropy;  // a nonce, not a simulation input: deliberately unseeded
-    session = static_cast<int64_t>((static_cast<uint64_t>(entropy()) << 32) | entropy());
-  }
-  Receiver rx;
-  rx.device_id = device_id;
-  rx.session = session;
-  rx.late_threshold_us = 1e6 / rate;
-  rx.latency_us.reserve(static_cast<size_t>(duration * rate * 1.1) + 16);
-  rx.answered_seq.reserve(rx.latency_us.capacity());
-  tangent::server::LcmSubscriptions subs(&lcm);
-  subs.Typed<tangent::wrench_t>(wrench_ch, [&rx](const tangent::wrench_t& m) { rx.OnWrench(&m); });
-  subs.Raw(pong_ch, [&rx](const void* data, uint32_t size) { rx.OnPong(data, size); });
-  subs.Typed<tangent::loop_stats_t>(stats_ch,
-                                    [&rx](const tangent::loop_stats_t& m) { rx.OnStats(&m); });
-  std::atomic<bool> rx_stop{false};
-  std::thread rx_thread([&] {
-    while (!rx_stop.load()) lcm.handleTimeout(5);
-  });
+/// A CSV file t,x,y,z when `name` is a readable file, else a built-in trajectory (throws with
+/// the reason on a bad file or an unknown name).
+HandTrajectory LoadTrajectory(const std::string& name) {
+  std::ifstream f(name);
+  if (!f) return HandTrajectory::BuiltIn(name);
+  std::stringstream text;
+  text << f.rdbuf();
+  return HandTrajectory::FromCsv(text.str(), name);
+}
 
-  prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
-  std::FILE* log = csv_log.empty() ? nullptr : std::fopen(csv_log.c_str(), "w");
+/// Makes every `every`-th message bad, one kind in turn; false when this one stays good.
+bool InjectBad(int64_t seq, int every, tangent::device_state_t* msg) {
+  if (every <= 0 || seq % every != 0) return false;
+  switch ((seq / every) % 5) {
+    case 0:
+      msg->position[0] = NAN;
+      break;
+    case 1:
+      msg->orientation[0] = 0.5;
+      break;
+    case 2:
+      msg->seq = seq - 1;
+      break;
+    case 3:
+      msg->position[1] += 0.03;  // 3 cm in a millisecond, inside the workspace
+      break;
+    case 4:
+      msg->position[1] += 0.5;  // outside the workspace
+      break;
+  }
+  return true;
+}
+
+/// What the device loop counted.
+struct DriveTotals {
+  int64_t sent = 0, sent_live = 0;
+  std::vector<Eigen::Vector3d> forces;  ///< the force applied at each step
+};
+
+/// The device loop at `rate` until the duration or a signal: render the last wrench through the
+/// driver's watchdog, step the device under the scripted hand, publish its state (and pings).
+DriveTotals DriveDevice(const PhantomOptions& o, const HandTrajectory& hand, lcm::LCM* lcm,
+                        Receiver* rx, DeviceModel* device,
+                        tangent::server::DriverWatchdog* watchdog, int64_t start) {
+  std::FILE* log = o.csv_log.empty() ? nullptr : std::fopen(o.csv_log.c_str(), "w");
   if (log) std::fprintf(log, "t,seq,x,y,z,hand_x,hand_y,hand_z,fx,fy,fz,energy\n");
-  DeviceModel device(dm);
-  const double dt = 1.0 / rate;
-  const int64_t period = static_cast<int64_t>(1e9 / rate);
-  const int64_t start = NowNs();
-  int64_t next = start, seq = 0, sent = 0, sent_live = 0;
-  int64_t next_ping = start;
-  std::vector<Eigen::Vector3d> forces;
-  forces.reserve(static_cast<size_t>(duration * rate) + 16);
+  DriveTotals totals;
+  totals.forces.reserve(static_cast<size_t>(o.duration * o.rate) + 16);
+  const double dt = 1.0 / o.rate;
+  const int64_t period = static_cast<int64_t>(1e9 / o.rate);
+  int64_t next = start, seq = 0, next_ping = start;
   tangent::device_state_t msg{};
   Eigen::Vector3d prev_hand = hand.At(0.0);
-  tangent::server::DriverWatchdog watchdog(1e-3 * watchdog_ms, watchdog_rate);
   for (int64_t k = 0; !g_stop.load(); ++k) {
     next += period;
     // Sleep then spin to the deadline (timer slack 1 ns).
@@ -226,104 +221,86 @@ int main(int argc, char** argv) {
     while (NowNs() < next) {
     }
     const double t = 1e-9 * static_cast<double>(NowNs() - start);
-    if (t >= duration) break;
+    if (t >= o.duration) break;
     LatestWrench w;
-    rx.wrench.Read(&w);
+    rx->wrench.Read(&w);
     // What a device driver must do (docs/server.md): render the last wrench while wrenches
     // keep coming; when none has come for the watchdog time, ramp the force to zero by itself.
     const Eigen::Vector3d rendered =
-        watchdog.Step(t, dt, Eigen::Vector3d(w.force[0], w.force[1], w.force[2]),
-                      w.received_ns > 0 ? 1e-9 * static_cast<double>(w.received_ns - start) : -1.0);
+        watchdog->Step(t, dt, Eigen::Vector3d(w.force[0], w.force[1], w.force[2]),
+                       w.received_ns > 0 ? 1e-9 * static_cast<double>(w.received_ns - start) : -1);
     const Eigen::Vector3d target = hand.At(t);
     const Eigen::Vector3d hand_v = (target - prev_hand) / dt;
     prev_hand = target;
-    const Eigen::Vector3d f = device.Step(dt, target, hand_v, rendered);
-    forces.push_back(f);
-    const bool silent = silence_at >= 0 && t >= silence_at && t < silence_at + silence_for;
+    const Eigen::Vector3d f = device->Step(dt, target, hand_v, rendered);
+    totals.forces.push_back(f);
+    const bool silent = o.silence_at >= 0 && t >= o.silence_at && t < o.silence_at + o.silence_for;
     if (!silent) {
       msg.utime = NowNs() / 1000;
-      msg.device_id = device_id;
-      msg.session = session;
+      msg.device_id = o.device_id;
+      msg.session = o.session;
       msg.seq = ++seq;
       for (int i = 0; i < 3; ++i) {
-        msg.position[i] = device.position()[i];
-        msg.velocity[i] = device.velocity()[i];
+        msg.position[i] = device->position()[i];
+        msg.velocity[i] = device->velocity()[i];
       }
       msg.orientation[0] = 1.0;
       msg.orientation[1] = msg.orientation[2] = msg.orientation[3] = 0.0;
       msg.buttons = 1;
-      if (inject_bad > 0 && seq % inject_bad == 0) {
-        switch ((seq / inject_bad) % 5) {
-          case 0:
-            msg.position[0] = NAN;
-            break;
-          case 1:
-            msg.orientation[0] = 0.5;
-            break;
-          case 2:
-            msg.seq = seq - 1;
-            break;
-          case 3:
-            msg.position[1] += 0.03;  // 3 cm in a millisecond, inside the workspace
-            break;
-          case 4:
-            msg.position[1] += 0.5;  // outside the workspace
-            break;
-        }
-      } else {
-        ++sent_live;
-      }
-      lcm.publish(device_ch, &msg);
-      ++sent;
+      if (!InjectBad(seq, o.inject_bad, &msg)) ++totals.sent_live;
+      lcm->publish(o.device_ch, &msg);
+      ++totals.sent;
     }
-    if (ping_rate > 0 && NowNs() >= next_ping) {
+    if (o.ping_rate > 0 && NowNs() >= next_ping) {
       const int64_t now = NowNs();
-      lcm.publish(ping_ch, &now, sizeof(now));
-      next_ping = now + static_cast<int64_t>(1e9 / ping_rate);
+      lcm->publish(o.ping_ch, &now, sizeof(now));
+      next_ping = now + static_cast<int64_t>(1e9 / o.ping_rate);
     }
     if (log) {
       std::fprintf(log, "%.4f,%lld,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.4f,%.4f,%.4f,%.6e\n", t,
-                   static_cast<long long>(msg.seq), device.position()[0], device.position()[1],
-                   device.position()[2], target[0], target[1], target[2], f[0], f[1], f[2],
-                   device.energy_from_server());
+                   static_cast<long long>(msg.seq), device->position()[0], device->position()[1],
+                   device->position()[2], target[0], target[1], target[2], f[0], f[1], f[2],
+                   device->energy_from_server());
     }
-    if (status && k % 100 == 0) {
-      const int bar = static_cast<int>(30.0 * t / duration);
+    if (o.status && k % 100 == 0) {
+      const int bar = static_cast<int>(30.0 * t / o.duration);
       std::fprintf(stderr,
                    "\r[%-30s] %4.1f/%.0fs  loop %5.0f Hz  contacts %d  |F| %.2f N  answered %zu  ",
-                   std::string(static_cast<size_t>(bar), '#').c_str(), t, duration,
-                   rx.loop_rate.load(), rx.contacts.load(), f.norm(), rx.latency_us.size());
+                   std::string(static_cast<size_t>(bar), '#').c_str(), t, o.duration,
+                   rx->loop_rate.load(), rx->contacts.load(), f.norm(), rx->latency_us.size());
     }
   }
-  // Let the last answers arrive.
-  SleepUntil(NowNs() + 50000000LL);
-  rx_stop.store(true);
-  rx_thread.join();
-  if (status) std::fprintf(stderr, "\n");
   if (log) std::fclose(log);
+  return totals;
+}
 
+/// The summary (key=value lines and a verdict line) on stdout.
+void PrintSummary(const PhantomOptions& o, const HandTrajectory& hand, const Receiver& rx,
+                  const DriveTotals& totals, const DeviceModel& device,
+                  const tangent::server::DriverWatchdog& watchdog, int64_t start) {
   const Percentiles lat = Percentiles::Of(rx.latency_us);
   const Percentiles ping = Percentiles::Of(rx.ping_us);
   const int64_t answered = static_cast<int64_t>(rx.answered_seq.size());
-  const int64_t lost = std::max<int64_t>(0, sent_live - answered);
+  const int64_t lost = std::max<int64_t>(0, totals.sent_live - answered);
   double mean_force = 0.0;
-  for (const auto& f : forces) mean_force += f.norm();
-  mean_force /= std::max<size_t>(1, forces.size());
-  const double roughness = tangent::server::ForceRoughness(forces);
-  const double bound = dm.max_force * dm.max_force / (2.0 * coupling_stiffness) + 1e-3;
+  for (const auto& f : totals.forces) mean_force += f.norm();
+  mean_force /= static_cast<double>(std::max<size_t>(1, totals.forces.size()));
+  const double roughness = tangent::server::ForceRoughness(totals.forces);
+  const double bound = o.dm.max_force * o.dm.max_force / (2.0 * o.coupling_stiffness) + 1e-3;
   const bool passive = device.energy_from_server() <= bound;
   const bool smooth = roughness < 0.05;
-  std::printf("tangent-phantom summary (%s, %.1f s at %.0f Hz):\n", hand.name().c_str(), duration,
-              rate);
+  std::printf("tangent-phantom summary (%s, %.1f s at %.0f Hz):\n", hand.name().c_str(), o.duration,
+              o.rate);
   std::printf("sent=%lld\nanswered=%lld\nlost=%lld\nlate=%lld\nbad_wrenches=%lld\n",
-              static_cast<long long>(sent), static_cast<long long>(answered),
+              static_cast<long long>(totals.sent), static_cast<long long>(answered),
               static_cast<long long>(lost), static_cast<long long>(rx.late),
               static_cast<long long>(rx.bad));
   const int64_t first = rx.first_answer_ns.load();
   std::printf(
       "session=%lld\nfirst_answer_ms=%.3f\ntimeout_wrenches=%lld\nfault_wrenches=%lld\n"
       "foreign_wrenches=%lld\nwatchdog_trips=%lld\n",
-      static_cast<long long>(session), first > 0 ? 1e-6 * static_cast<double>(first - start) : -1.0,
+      static_cast<long long>(o.session),
+      first > 0 ? 1e-6 * static_cast<double>(first - start) : -1.0,
       static_cast<long long>(rx.timeout_wrenches), static_cast<long long>(rx.fault_wrenches),
       static_cast<long long>(rx.foreign), static_cast<long long>(watchdog.trips()));
   std::printf(
@@ -336,12 +313,72 @@ int main(int argc, char** argv) {
   std::printf("energy_from_server_j=%.5f\npassivity_bound_j=%.5f\n", device.energy_from_server(),
               bound);
   std::printf("loop_rate_hz=%.0f\ncontacts=%d\n", rx.loop_rate.load(), rx.contacts.load());
-  std::printf("verdict=%s\n", passive && smooth && answered > 0 ? "STABLE" : "UNSTABLE");
+  const bool stable = passive && smooth && answered > 0;
+  std::printf("verdict=%s\n", stable ? "STABLE" : "UNSTABLE");
   std::printf(
       "%s: energy from the server %.2f mJ (bound %.2f mJ: %s), force roughness %.4f N "
       "(%s), round trip p50 %.0f us vs bare LCM ping %.0f us\n",
-      passive && smooth && answered > 0 ? "STABLE" : "UNSTABLE", 1e3 * device.energy_from_server(),
-      1e3 * bound, passive ? "passive" : "NOT passive", roughness,
-      smooth ? "smooth" : "oscillating", lat.p50, ping.p50);
+      stable ? "STABLE" : "UNSTABLE", 1e3 * device.energy_from_server(), 1e3 * bound,
+      passive ? "passive" : "NOT passive", roughness, smooth ? "smooth" : "oscillating", lat.p50,
+      ping.p50);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"tangent-phantom: simulated PHANToM client for tangentd"};
+  PhantomOptions o;
+  AddOptions(&app, &o);
+  CLI11_PARSE(app, argc, argv);
+
+  HandTrajectory hand;
+  try {
+    hand = LoadTrajectory(o.trajectory);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tangent-phantom: %s\n", e.what());
+    return 2;
+  }
+  lcm::LCM lcm(o.url);
+  if (!lcm.good()) {
+    std::fprintf(stderr,
+                 "tangent-phantom: LCM could not start on \"%s\" (multicast not routed?). Fix, as "
+                 "root: ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo\n",
+                 o.url.c_str());
+    return 3;
+  }
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  if (o.session == 0) {
+    std::random_device entropy;  // a nonce, not a simulation input: deliberately unseeded
+    o.session = static_cast<int64_t>((static_cast<uint64_t>(entropy()) << 32) | entropy());
+  }
+  Receiver rx;
+  rx.device_id = o.device_id;
+  rx.session = o.session;
+  rx.late_threshold_us = 1e6 / o.rate;
+  rx.latency_us.reserve(static_cast<size_t>(o.duration * o.rate * 1.1) + 16);
+  rx.answered_seq.reserve(rx.latency_us.capacity());
+  tangent::server::LcmSubscriptions subs(&lcm);
+  subs.Typed<tangent::wrench_t>(o.wrench_ch,
+                                [&rx](const tangent::wrench_t& m) { rx.OnWrench(&m); });
+  subs.Raw(o.pong_ch, [&rx](const void* data, uint32_t size) { rx.OnPong(data, size); });
+  subs.Typed<tangent::loop_stats_t>(o.stats_ch,
+                                    [&rx](const tangent::loop_stats_t& m) { rx.OnStats(&m); });
+  std::atomic<bool> rx_stop{false};
+  std::thread rx_thread([&] {
+    while (!rx_stop.load()) lcm.handleTimeout(5);
+  });
+
+  prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
+  DeviceModel device(o.dm);
+  tangent::server::DriverWatchdog watchdog(1e-3 * o.watchdog_ms, o.watchdog_rate);
+  const int64_t start = NowNs();
+  const DriveTotals totals = DriveDevice(o, hand, &lcm, &rx, &device, &watchdog, start);
+  // Let the last answers arrive.
+  SleepUntil(NowNs() + 50000000LL);
+  rx_stop.store(true);
+  rx_thread.join();
+  if (o.status) std::fprintf(stderr, "\n");
+  PrintSummary(o, hand, rx, totals, device, watchdog, start);
   return 0;
 }
