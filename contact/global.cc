@@ -54,7 +54,7 @@ struct Watched {
   std::vector<Chunk> chunks;
   // The whole offset mesh's box (surface frame) as an FCL box: the object the broad-phase
   // manager sees.
-  Eigen::Vector3d centre, half;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero(), half = Eigen::Vector3d::Zero();
   std::unique_ptr<fcl::CollisionObjectd> object;
   std::vector<WorldBox> placed;  // chunks' world boxes this pass (filled on demand)
   int placed_pass = -1;
@@ -203,6 +203,97 @@ bool BroadPhaseCallback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, vo
 
 }  // namespace
 
+namespace {
+
+// Chunks of a surface's offset mesh: blocks of grid cells (chunk_v_cells across v, as many
+// along u as make about chunk_triangles triangles), each with the vertices it uses and its own
+// BVH. Small in both directions, so the chunks near a tracked contact fall inside its sphere of
+// neglect and are skipped.
+std::vector<Chunk> BuildChunks(const nurbs::OffsetMesh& mesh, const GlobalOptions& options) {
+  const int nt = static_cast<int>(mesh.base.triangles.size());
+  const int nvc = std::max(1, static_cast<int>(mesh.base.v_lines.size()) - 1);
+  const int bv = std::min(nvc, std::max(1, options.chunk_v_cells));
+  const int bu = std::max(1, options.chunk_u_cells);
+  std::map<std::pair<int, int>, std::vector<int>> blocks;
+  for (int t = 0; t < nt; ++t) {
+    const int cell = t / 2;
+    blocks[{(cell / nvc) / bu, (cell % nvc) / bv}].push_back(t);
+  }
+  std::vector<Chunk> chunks;
+  for (const auto& [block, triangles] : blocks) {
+    std::vector<int> local(mesh.vertices.size(), -1);
+    std::vector<fcl::Vector3d> pts;
+    std::vector<fcl::Triangle> tris;
+    Chunk c;
+    c.triangles = triangles;
+    c.uv_lo = Eigen::Vector2d::Constant(1e300);
+    c.uv_hi = Eigen::Vector2d::Constant(-1e300);
+    for (int t : triangles) {
+      size_t idx[3];
+      for (int k = 0; k < 3; ++k) {
+        const int v = mesh.base.triangles[static_cast<size_t>(t)][static_cast<size_t>(k)];
+        if (local[static_cast<size_t>(v)] < 0) {
+          local[static_cast<size_t>(v)] = static_cast<int>(pts.size());
+          pts.push_back(mesh.vertices[static_cast<size_t>(v)]);
+        }
+        idx[k] = static_cast<size_t>(local[static_cast<size_t>(v)]);
+        c.uv_lo = c.uv_lo.cwiseMin(mesh.base.uv[static_cast<size_t>(v)]);
+        c.uv_hi = c.uv_hi.cwiseMax(mesh.base.uv[static_cast<size_t>(v)]);
+      }
+      tris.emplace_back(idx[0], idx[1], idx[2]);
+    }
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+    for (const fcl::Vector3d& x : pts) {
+      lo = lo.cwiseMin(x);
+      hi = hi.cwiseMax(x);
+    }
+    c.centre = 0.5 * (lo + hi);
+    c.half = 0.5 * (hi - lo);
+    c.model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
+    c.model->beginModel();
+    c.model->addSubModel(pts, tris);
+    c.model->endModel();
+    c.object = std::make_unique<fcl::CollisionObjectd>(c.model);
+    chunks.push_back(std::move(c));
+  }
+  return chunks;
+}
+
+// A surface with an offset mesh, as the global stage watches it: its chunks, the whole mesh's
+// box as the broad phase's object (user data: the surface's index), and its metres per
+// parameter unit (mean |S_u|, |S_v| over the mesh's vertices) for distances along it.
+Watched WatchSurface(int index, const GlobalSurface& s, const GlobalOptions& options) {
+  Watched w;
+  w.s = s;
+  w.chunks = BuildChunks(*s.mesh, options);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  for (const Eigen::Vector3d& x : s.mesh->vertices) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  w.centre = 0.5 * (lo + hi);
+  w.half = 0.5 * (hi - lo);
+  w.object = std::make_unique<fcl::CollisionObjectd>(
+      std::make_shared<fcl::Boxd>(2.0 * w.half + Eigen::Vector3d::Constant(1e-9)));
+  w.object->setUserData(reinterpret_cast<void*>(static_cast<intptr_t>(index)));
+  double su = 0.0, sv = 0.0;
+  for (const Eigen::Vector2d& uv : s.mesh->base.uv) {
+    const nurbs::SurfacePoint p = s.surface->Evaluate(uv[0], uv[1], 1);
+    su += p.S_u.norm();
+    sv += p.S_v.norm();
+  }
+  const double count = std::max<double>(1.0, static_cast<double>(s.mesh->base.uv.size()));
+  w.L_u = su / count;
+  w.L_v = sv / count;
+  w.w_u = s.surface->knots_u().domain_end() - s.surface->knots_u().domain_begin();
+  w.w_v = s.surface->knots_v().domain_end() - s.surface->knots_v().domain_begin();
+  w.periodic_u = s.surface->periodic_u();
+  w.periodic_v = s.surface->periodic_v();
+  return w;
+}
+
+}  // namespace
+
 GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
                                        const std::vector<std::pair<int, int>>& pairs,
                                        const GlobalOptions& options)
@@ -213,6 +304,7 @@ GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
   Impl& m = *impl_;
   m.n = static_cast<int>(surfaces.size());
   m.allowed.assign(static_cast<size_t>(m.n * m.n), 0);
+  std::vector<char> declared(surfaces.size(), 0);
   for (const auto& [a, b] : pairs) {
     if (a < 0 || b < 0 || a >= m.n || b >= m.n || a == b) {
       throw std::invalid_argument("global contact: pair (" + std::to_string(a) + ", " +
@@ -220,6 +312,7 @@ GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
                                   std::to_string(m.n) + " surfaces");
     }
     m.allowed[static_cast<size_t>(a * m.n + b)] = m.allowed[static_cast<size_t>(b * m.n + a)] = 1;
+    declared[static_cast<size_t>(a)] = declared[static_cast<size_t>(b)] = 1;
   }
   if (options.broad_phase == GlobalOptions::BroadPhase::kSweepAndPrune) {
     m.manager = std::make_unique<fcl::SaPCollisionManagerd>();
@@ -228,17 +321,13 @@ GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
   }
   for (int i = 0; i < m.n; ++i) {
     const GlobalSurface& s = surfaces[static_cast<size_t>(i)];
-    if (!s.surface) {
-      throw std::invalid_argument("global contact: surface " + std::to_string(i) + " is null");
-    }
-    bool declared = false;
-    for (const auto& [a, b] : pairs) declared = declared || a == i || b == i;
+    const std::string name = "global contact: surface " + std::to_string(i);
+    if (!s.surface) throw std::invalid_argument(name + " is null");
     if (!s.mesh) {
       // A surface in no declared pair needs no mesh: it is never tested (model only what the
       // scene asks for).
-      if (declared) {
-        throw std::invalid_argument("global contact: surface " + std::to_string(i) +
-                                    " is in a declared pair but has no offset mesh");
+      if (declared[static_cast<size_t>(i)]) {
+        throw std::invalid_argument(name + " is in a declared pair but has no offset mesh");
       }
       Watched w;
       w.s = s;
@@ -246,83 +335,9 @@ GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
       continue;
     }
     if (s.mesh->offset < options.release) {
-      throw std::invalid_argument("global contact: surface " + std::to_string(i) +
-                                  "'s offset is below the release distance");
+      throw std::invalid_argument(name + "'s offset is below the release distance");
     }
-    Watched w;
-    w.s = s;
-    // Chunks: blocks of grid cells (4 across v, as many along u as make about chunk_triangles
-    // triangles), each with the vertices it uses. Small in both directions, so the chunks near a
-    // tracked contact fall inside its sphere of neglect and are skipped.
-    const int nt = static_cast<int>(s.mesh->base.triangles.size());
-    const int nvc = std::max(1, static_cast<int>(s.mesh->base.v_lines.size()) - 1);
-    const int bv = std::min(nvc, std::max(1, options.chunk_v_cells));
-    const int bu = std::max(1, options.chunk_u_cells);
-    std::map<std::pair<int, int>, std::vector<int>> blocks;
-    for (int t = 0; t < nt; ++t) {
-      const int cell = t / 2;
-      blocks[{(cell / nvc) / bu, (cell % nvc) / bv}].push_back(t);
-    }
-    for (const auto& [block, triangles] : blocks) {
-      std::vector<int> local(s.mesh->vertices.size(), -1);
-      std::vector<fcl::Vector3d> pts;
-      std::vector<fcl::Triangle> tris;
-      Chunk c;
-      c.triangles = triangles;
-      c.uv_lo = Eigen::Vector2d::Constant(1e300);
-      c.uv_hi = Eigen::Vector2d::Constant(-1e300);
-      for (int t : triangles) {
-        size_t idx[3];
-        for (int k = 0; k < 3; ++k) {
-          const int v = s.mesh->base.triangles[static_cast<size_t>(t)][static_cast<size_t>(k)];
-          if (local[static_cast<size_t>(v)] < 0) {
-            local[static_cast<size_t>(v)] = static_cast<int>(pts.size());
-            pts.push_back(s.mesh->vertices[static_cast<size_t>(v)]);
-          }
-          idx[k] = static_cast<size_t>(local[static_cast<size_t>(v)]);
-          c.uv_lo = c.uv_lo.cwiseMin(s.mesh->base.uv[static_cast<size_t>(v)]);
-          c.uv_hi = c.uv_hi.cwiseMax(s.mesh->base.uv[static_cast<size_t>(v)]);
-        }
-        tris.emplace_back(idx[0], idx[1], idx[2]);
-      }
-      Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-      for (const fcl::Vector3d& x : pts) {
-        lo = lo.cwiseMin(x);
-        hi = hi.cwiseMax(x);
-      }
-      c.centre = 0.5 * (lo + hi);
-      c.half = 0.5 * (hi - lo);
-      c.model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
-      c.model->beginModel();
-      c.model->addSubModel(pts, tris);
-      c.model->endModel();
-      c.object = std::make_unique<fcl::CollisionObjectd>(c.model);
-      w.chunks.push_back(std::move(c));
-    }
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-    for (const Eigen::Vector3d& x : s.mesh->vertices) {
-      lo = lo.cwiseMin(x);
-      hi = hi.cwiseMax(x);
-    }
-    w.centre = 0.5 * (lo + hi);
-    w.half = 0.5 * (hi - lo);
-    w.object = std::make_unique<fcl::CollisionObjectd>(
-        std::make_shared<fcl::Boxd>(2.0 * w.half + Eigen::Vector3d::Constant(1e-9)));
-    w.object->setUserData(reinterpret_cast<void*>(static_cast<intptr_t>(i)));
-    double su = 0.0, sv = 0.0;
-    for (const Eigen::Vector2d& uv : s.mesh->base.uv) {
-      const nurbs::SurfacePoint p = s.surface->Evaluate(uv[0], uv[1], 1);
-      su += p.S_u.norm();
-      sv += p.S_v.norm();
-    }
-    const double count = std::max<double>(1.0, static_cast<double>(s.mesh->base.uv.size()));
-    w.L_u = su / count;
-    w.L_v = sv / count;
-    w.w_u = s.surface->knots_u().domain_end() - s.surface->knots_u().domain_begin();
-    w.w_v = s.surface->knots_v().domain_end() - s.surface->knots_v().domain_begin();
-    w.periodic_u = s.surface->periodic_u();
-    w.periodic_v = s.surface->periodic_v();
-    m.watched.push_back(std::move(w));
+    m.watched.push_back(WatchSurface(i, s, options));
   }
   for (Watched& w : m.watched) {
     if (w.object) m.manager->registerObject(w.object.get());
@@ -398,35 +413,31 @@ void GlobalContactStage::BroadPhase(const std::vector<BodyPose>& poses, GlobalSt
   }
 }
 
-void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
-                                      const std::vector<BodyPose>& poses,
-                                      const std::vector<GlobalContact>& tracked,
-                                      GlobalStats* st_out) {
-  Impl& m = *impl_;
-  GlobalStats& st = *st_out;
-  const double rho = options_.neglect_radius, far = options_.far_factor * rho;
-  // The pair's parameter box (u, v, s, t).
+namespace {
+
+// The parameter box (u, v, s, t) of a pair of surfaces.
+Box PairDomains(const nurbs::NurbsSurface& fa, const nurbs::NurbsSurface& fb) {
   Box domains;
-  {
-    const nurbs::NurbsSurface& fa = *m.watched[static_cast<size_t>(a)].s.surface;
-    const nurbs::NurbsSurface& fb = *m.watched[static_cast<size_t>(b)].s.surface;
-    domains.lo << fa.knots_u().domain_begin(), fa.knots_v().domain_begin(),
-        fb.knots_u().domain_begin(), fb.knots_v().domain_begin();
-    domains.hi << fa.knots_u().domain_end(), fa.knots_v().domain_end(), fb.knots_u().domain_end(),
-        fb.knots_v().domain_end();
-    domains.periodic = {fa.periodic_u(), fa.periodic_v(), fb.periodic_u(), fb.periodic_v()};
-  }
-  std::vector<Seed>& accepted = m.accepted;
-  std::vector<std::pair<int, int>>& triangle_pairs = m.triangle_pairs;
+  domains.lo << fa.knots_u().domain_begin(), fa.knots_v().domain_begin(),
+      fb.knots_u().domain_begin(), fb.knots_v().domain_begin();
+  domains.hi << fa.knots_u().domain_end(), fa.knots_v().domain_end(), fb.knots_u().domain_end(),
+      fb.knots_v().domain_end();
+  domains.periodic = {fa.periodic_u(), fa.periodic_v(), fb.periodic_u(), fb.periodic_v()};
+  return domains;
+}
+
+// Narrow phase on the chunk pairs candidates[first, last) of surfaces a, b whose boxes overlap:
+// the intersecting offset triangles (primitive pairs only, enable_contact = false: seeds are
+// placed from the triangles) into m.triangle_pairs. A chunk pair lying, on both surfaces,
+// within far_factor·ρ along the surface of a tracked contact is skipped: every seed it could
+// give would fall in that contact's sphere of neglect.
+void NarrowPhase(GlobalContactStage::Impl& m, const GlobalOptions& options, int a, int b,
+                 size_t first, size_t last, const BodyPose& pa, const BodyPose& pb,
+                 const std::vector<GlobalContact>& tracked, GlobalStats* st) {
+  const double far = options.far_factor * options.neglect_radius;
   const Watched& wa = m.watched[static_cast<size_t>(a)];
   const Watched& wb = m.watched[static_cast<size_t>(b)];
-  const BodyPose& pa = poses[static_cast<size_t>(wa.s.body)];
-  const BodyPose& pb = poses[static_cast<size_t>(wb.s.body)];
-  // 2. Narrow phase on the chunk pairs whose boxes overlap: intersecting offset triangles
-  //    (primitive pairs only, enable_contact = false: seeds are placed from the triangles).
-  //    A chunk pair lying, on both surfaces, within ρ along the surface of a tracked contact is
-  //    skipped: every seed it could give would fall in that contact's sphere of neglect.
-  triangle_pairs.clear();
+  m.triangle_pairs.clear();
   for (size_t k = first; k < last; ++k) {
     const Chunk& ca = wa.chunks[static_cast<size_t>(m.candidates[k][2])];
     const Chunk& cb = wb.chunks[static_cast<size_t>(m.candidates[k][3])];
@@ -439,24 +450,36 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
       }
     }
     if (skip) {
-      ++st.chunk_pairs_skipped;
+      ++st->chunk_pairs_skipped;
       continue;
     }
-    ++st.chunk_pairs_tested;
+    ++st->chunk_pairs_tested;
     ca.object->setTransform(pa.R_WB, pa.q.head<3>());
     cb.object->setTransform(pb.R_WB, pb.q.head<3>());
-    fcl::CollisionRequestd request(static_cast<size_t>(options_.max_triangle_pairs), false);
+    fcl::CollisionRequestd request(static_cast<size_t>(options.max_triangle_pairs), false);
     fcl::CollisionResultd result;
     fcl::collide(ca.object.get(), cb.object.get(), request, result);
     for (size_t r = 0; r < result.numContacts(); ++r) {
       const fcl::Contactd& c = result.getContact(r);
       const bool swapped = c.o1 != ca.object->collisionGeometry().get();
-      triangle_pairs.emplace_back(ca.triangles[static_cast<size_t>(swapped ? c.b2 : c.b1)],
-                                  cb.triangles[static_cast<size_t>(swapped ? c.b1 : c.b2)]);
+      m.triangle_pairs.emplace_back(ca.triangles[static_cast<size_t>(swapped ? c.b2 : c.b1)],
+                                    cb.triangles[static_cast<size_t>(swapped ? c.b1 : c.b2)]);
     }
   }
-  st.triangle_pairs += static_cast<int>(triangle_pairs.size());
-  // Tracked contacts of this pair: where they are now, as neglect centres.
+  st->triangle_pairs += static_cast<int>(m.triangle_pairs.size());
+}
+
+// Seeds from m.triangle_pairs, clustered by spheres of neglect into m.accepted: the pair's
+// tracked contacts first (where they are now, as neglect centres; returns how many), then one
+// cluster per seed not within ρ (and topologically near on both surfaces) of an earlier one.
+size_t ClusterSeeds(GlobalContactStage::Impl& m, const GlobalOptions& options, int a, int b,
+                    const BodyPose& pa, const BodyPose& pb,
+                    const std::vector<GlobalContact>& tracked, const Box& domains,
+                    GlobalStats* st) {
+  const double rho = options.neglect_radius, far = options.far_factor * rho;
+  const Watched& wa = m.watched[static_cast<size_t>(a)];
+  const Watched& wb = m.watched[static_cast<size_t>(b)];
+  std::vector<Seed>& accepted = m.accepted;
   accepted.clear();
   for (const GlobalContact& c : tracked) {
     if (c.a != a || c.b != b) continue;
@@ -468,21 +491,21 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
     accepted.push_back(t);
   }
   const size_t n_tracked = accepted.size();
-  for (const auto& [ta, tb] : triangle_pairs) {
+  for (const auto& [ta, tb] : m.triangle_pairs) {
     // Where the triangles meet: the midpoint of their centroids, projected on each. (FCL's
     // contact positions, with enable_contact, measured centimetres off for mesh pairs in 0.7
     // and cost a triangle–triangle intersection each.)
     Seed s;
     s.x = 0.5 * (Centroid(wa, pa, ta) + Centroid(wb, pb, tb));
     s.u << ParametersAt(wa, pa, ta, s.x), ParametersAt(wb, pb, tb, s.x);
-    // 3. Spheres of neglect, unless topologically far on either surface.
+    // Spheres of neglect, unless topologically far on either surface.
     Seed* owner = nullptr;
     for (size_t k = 0; k < accepted.size(); ++k) {
       const Seed& o = accepted[k];
       if ((o.x - s.x).norm() < rho && wa.Along(o.u.head<2>(), s.u.head<2>()) <= far &&
           wb.Along(o.u.tail<2>(), s.u.tail<2>()) <= far) {
         owner = k >= n_tracked ? &accepted[k] : nullptr;
-        ++st.seeds_neglected;
+        ++st->seeds_neglected;
         s.count = -1;  // neglected
         break;
       }
@@ -491,34 +514,58 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
     Seed& cluster = owner ? *owner : (accepted.push_back(s), accepted.back());
     AddToCluster(s.u, domains, &cluster);
   }
-  // 4. Refine each cluster by the extremal Newton solver: from the mean of its seeds (the
-  //    middle of where the offsets overlap, near the closest or deepest pair), then from its
-  //    first seed and a few other members while that fails. (Measured: from the first seed
-  //    alone, 2.4 % of deep contacts, whose seeds ring the overlap, converged to the far sides'
-  //    pair instead.)
-  for (size_t k = n_tracked; k < accepted.size(); ++k) {
+  return n_tracked;
+}
+
+// Refines each new cluster m.accepted[n_tracked...] by the extremal Newton solver: from the mean
+// of its seeds (the middle of where the offsets overlap, near the closest or deepest pair), then
+// from its first seed and a few other members while that fails. (Measured: from the first seed
+// alone, 2.4 % of deep contacts, whose seeds ring the overlap, converged to the far sides' pair
+// instead.) Contacts not already in *found are added to it.
+void RefineClusters(const GlobalContactStage::Impl& m, const GlobalOptions& options, int a, int b,
+                    size_t n_tracked, const BodyPose& pa, const BodyPose& pb, const Box& domains,
+                    GlobalStats* st, std::vector<GlobalContact>* found) {
+  const Watched& wa = m.watched[static_cast<size_t>(a)];
+  const Watched& wb = m.watched[static_cast<size_t>(b)];
+  for (size_t k = n_tracked; k < m.accepted.size(); ++k) {
     SurfaceSurfaceExtremum e;
     bool ok = false;
-    const Seed& cl = accepted[k];
+    const Seed& cl = m.accepted[k];
     for (int attempt = 0; attempt < 2 + cl.n_members && !ok; ++attempt) {
-      ++st.seeds_refined;
+      ++st->seeds_refined;
       const Eigen::Vector4d seed = attempt == 0   ? ClusterMean(cl, domains)
                                    : attempt == 1 ? cl.u
                                                   : cl.members[static_cast<size_t>(attempt - 2)];
       e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, seed);
-      ok = e.status == ExtremalStatus::kConverged && e.beta < options_.activation &&
-           e.beta > -options_.max_penetration && e.alignment < 0.0;
+      ok = e.status == ExtremalStatus::kConverged && e.beta < options.activation &&
+           e.beta > -options.max_penetration && e.alignment < 0.0;
     }
     if (!ok) continue;
     bool duplicate = false;
-    for (const GlobalContact& f : found_) {
+    for (const GlobalContact& f : *found) {
       if (f.a == a && f.b == b && (f.p_a - e.p_f).norm() < 1e-8 && (f.p_b - e.p_g).norm() < 1e-8) {
         duplicate = true;
         break;
       }
     }
-    if (!duplicate) found_.push_back({a, b, e.u, e.beta, e.p_f, e.p_g});
+    if (!duplicate) found->push_back({a, b, e.u, e.beta, e.p_f, e.p_g});
   }
+}
+
+}  // namespace
+
+void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
+                                      const std::vector<BodyPose>& poses,
+                                      const std::vector<GlobalContact>& tracked, GlobalStats* st) {
+  Impl& m = *impl_;
+  const Watched& wa = m.watched[static_cast<size_t>(a)];
+  const Watched& wb = m.watched[static_cast<size_t>(b)];
+  const BodyPose& pa = poses[static_cast<size_t>(wa.s.body)];
+  const BodyPose& pb = poses[static_cast<size_t>(wb.s.body)];
+  const Box domains = PairDomains(*wa.s.surface, *wb.s.surface);
+  NarrowPhase(m, options_, a, b, first, last, pa, pb, tracked, st);
+  const size_t n_tracked = ClusterSeeds(m, options_, a, b, pa, pb, tracked, domains, st);
+  RefineClusters(m, options_, a, b, n_tracked, pa, pb, domains, st, &found_);
 }
 
 void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
