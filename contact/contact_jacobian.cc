@@ -37,13 +37,13 @@ struct FrameBlocks {
 FrameBlocks MakeFrameBlocks(const PlacedSurfacePoint& p) {
   FrameBlocks b;
   const double su = p.world.S_u.norm();
-  const double inv_n = 1.0 / p.N.norm();
+  const double inv_n = 1.0 / p.N_W.norm();
   b.x = p.world.S_u / su;
-  b.z = p.N * inv_n;
+  b.z = p.N_W * inv_n;
   b.y = b.z.cross(b.x);
   b.E << su, b.x.dot(p.world.S_v), 0.0, b.y.dot(p.world.S_v);
-  b.F << b.x.dot(p.N_u) * inv_n, b.x.dot(p.N_v) * inv_n, b.y.dot(p.N_u) * inv_n,
-      b.y.dot(p.N_v) * inv_n;
+  b.F << b.x.dot(p.N_W_u) * inv_n, b.x.dot(p.N_W_v) * inv_n, b.y.dot(p.N_W_u) * inv_n,
+      b.y.dot(p.N_W_v) * inv_n;
   return b;
 }
 
@@ -65,8 +65,8 @@ bool ContactJacobianImplicit(const SurfacePairEval& e, const BodyPose& pose_f,
   Matrix4x14 F_q;
   F_q.row(0) = gw.S_u.transpose() * d_q + e.d.transpose() * gs_q;
   F_q.row(1) = gw.S_v.transpose() * d_q + e.d.transpose() * gt_q;
-  F_q.row(2) = gw.S_u.transpose() * N_q + e.f.N.transpose() * gs_q;
-  F_q.row(3) = gw.S_v.transpose() * N_q + e.f.N.transpose() * gt_q;
+  F_q.row(2) = gw.S_u.transpose() * N_q + e.f.N_W.transpose() * gs_q;
+  F_q.row(3) = gw.S_v.transpose() * N_q + e.f.N_W.transpose() * gt_q;
   const auto lu = internal::Factor<4>(e.F_u);
   double rcond = 0.0;
   if (internal::IsSingular<4>(lu, 0.0, &rcond)) return false;
@@ -194,7 +194,7 @@ void PointAndDistanceJacobians(const SurfacePairEval& e, const BodyPose& pose_f,
   g_q->rightCols<7>() = PointJacobian(pose_g, e.g.body.S);
   *f_q += e.f.world.S_u * u_q.row(0) + e.f.world.S_v * u_q.row(1);
   *g_q += e.g.world.S_u * u_q.row(2) + e.g.world.S_v * u_q.row(3);
-  *beta_q = e.g.N.normalized().transpose() * (*f_q - *g_q);
+  *beta_q = e.g.N_W.normalized().transpose() * (*f_q - *g_q);
 }
 
 bool CurveSurfaceJacobianImplicit(const CurveSurfaceEval& e, const BodyPose& pose_f,
@@ -214,7 +214,7 @@ bool CurveSurfaceJacobianImplicit(const CurveSurfaceEval& e, const BodyPose& pos
   Matrix3x14 F_q;
   F_q.row(0) = fw.S_u.transpose() * d_q + e.d.transpose() * fu_q;
   F_q.row(1) = fw.S_v.transpose() * d_q + e.d.transpose() * fv_q;
-  F_q.row(2) = e.g.world.C1.transpose() * N_q + e.f.N.transpose() * g1_q;
+  F_q.row(2) = e.g.world.C1.transpose() * N_q + e.f.N_W.transpose() * g1_q;
   const auto lu = internal::Factor<3>(e.F_u);
   double rcond = 0.0;
   if (internal::IsSingular<3>(lu, 0.0, &rcond)) return false;

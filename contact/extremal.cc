@@ -95,7 +95,7 @@ void EvaluatePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
   EvaluatePlaced(g, pose_g, u[2], u[3], hint_g, &out->g);
   const nurbs::SurfacePoint& a = out->f.world;
   const nurbs::SurfacePoint& b = out->g.world;
-  const Eigen::Vector3d& N = out->f.N;
+  const Eigen::Vector3d& N = out->f.N_W;
   const Eigen::Vector3d d = a.S - b.S;
   out->d = d;
   out->F << d.dot(b.S_u), d.dot(b.S_v), N.dot(b.S_u), N.dot(b.S_v);
@@ -103,9 +103,9 @@ void EvaluatePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
   J << a.S_u.dot(b.S_u), a.S_v.dot(b.S_u), -b.S_u.dot(b.S_u) + d.dot(b.S_uu),
       -b.S_v.dot(b.S_u) + d.dot(b.S_uv),  //
       a.S_u.dot(b.S_v), a.S_v.dot(b.S_v), -b.S_u.dot(b.S_v) + d.dot(b.S_uv),
-      -b.S_v.dot(b.S_v) + d.dot(b.S_vv),                                           //
-      out->f.N_u.dot(b.S_u), out->f.N_v.dot(b.S_u), N.dot(b.S_uu), N.dot(b.S_uv),  //
-      out->f.N_u.dot(b.S_v), out->f.N_v.dot(b.S_v), N.dot(b.S_uv), N.dot(b.S_vv);
+      -b.S_v.dot(b.S_v) + d.dot(b.S_vv),                                               //
+      out->f.N_W_u.dot(b.S_u), out->f.N_W_v.dot(b.S_u), N.dot(b.S_uu), N.dot(b.S_uv),  //
+      out->f.N_W_u.dot(b.S_v), out->f.N_W_v.dot(b.S_v), N.dot(b.S_uv), N.dot(b.S_vv);
   if (gradient_form) FillGradientForm(out);
 }
 
@@ -395,7 +395,7 @@ Extremum InvalidExtremum(const Eigen::Matrix<double, N, 1>& u) {
   out.status = ExtremalStatus::kInvalidInput;
   out.kind = ExtremumKind::kDegenerate;
   out.p_f.setZero();
-  out.frame_f.setIdentity();
+  out.R_WCf.setIdentity();
   return out;
 }
 
@@ -410,12 +410,12 @@ void FillPairFields(const SurfacePairEval& e, const Eigen::Vector4d& u,
   out->u = u;
   out->p_f = e.f.world.S;
   out->p_g = e.g.world.S;
-  out->frame_f = ContactFrame(e.f);
-  out->frame_g = ContactFrame(e.g);
-  out->n_g = out->frame_g.col(2);
+  out->R_WCf = ContactFrame(e.f);
+  out->R_WCg = ContactFrame(e.g);
+  out->n_g = out->R_WCg.col(2);
   out->direction = out->n_g;
   out->beta = e.d.dot(out->n_g);
-  out->alignment = out->frame_f.col(2).dot(out->n_g);
+  out->alignment = out->R_WCf.col(2).dot(out->n_g);
 }
 
 }  // namespace
@@ -425,7 +425,7 @@ double ScaledContactResidual(const SurfacePairEval& e, double beta) {
       std::sqrt(std::max(e.g.world.S_u.squaredNorm(), e.g.world.S_v.squaredNorm()));
   return std::max(std::max(std::abs(e.F[0]), std::abs(e.F[1])) /
                       (len_g * std::max(std::abs(beta), 1e-3 * len_g)),
-                  std::max(std::abs(e.F[2]), std::abs(e.F[3])) / (e.f.N.norm() * len_g));
+                  std::max(std::abs(e.F[2]), std::abs(e.F[3])) / (e.f.N_W.norm() * len_g));
 }
 
 SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
@@ -442,7 +442,7 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
     out.p_g.setZero();
     out.n_g = Eigen::Vector3d::UnitZ();
     out.direction = out.n_g;
-    out.frame_g.setIdentity();
+    out.R_WCg.setIdentity();
     out.alignment = -1.0;
     return out;
   }
@@ -457,7 +457,7 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
     s->hess = e.hess;
     s->classify_scale = std::max(FirstFormScale(e.f.world), FirstFormScale(e.g.world));
     // Each inside the other (facing normals): not a spurious saddle of a separated pair.
-    s->penetrating = e.d.dot(e.g.N) < 0.0 && e.d.dot(e.f.N) > 0.0;
+    s->penetrating = e.d.dot(e.g.N_W) < 0.0 && e.d.dot(e.f.N_W) > 0.0;
   };
   Eigen::Vector4d lo, hi;
   lo << Lo(f), Lo(g);
@@ -503,7 +503,7 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   out.at_bound = r.active;
   const double dist = e.d.norm();
   if (std::any_of(r.active.begin(), r.active.end(), [](bool b) { return b; }) && dist > 0.0) {
-    const double side = BoundarySide(e.d, out.frame_f.col(2), out.frame_g.col(2));
+    const double side = BoundarySide(e.d, out.R_WCf.col(2), out.R_WCg.col(2));
     out.direction = side * (e.d / dist);
     out.beta = side * dist;
   }
@@ -579,9 +579,9 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
   PointSurfaceExtremum out;
   out.u = r.x;
   out.p_f = p.world.S;
-  out.frame_f = ContactFrame(p);
+  out.R_WCf = ContactFrame(p);
   const Eigen::Vector3d d = x_W - p.world.S;
-  out.distance = d.dot(out.frame_f.col(2));
+  out.distance = d.dot(out.R_WCf.col(2));
   if (std::any_of(r.active.begin(), r.active.end(), [](bool b) { return b; })) {
     // Side by f's normal (x outside: positive), |x − f| in size.
     out.distance = (out.distance < 0.0 ? -1.0 : 1.0) * d.norm();
@@ -601,14 +601,14 @@ void EvaluateCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f, 
   EvaluatePlaced(g, pose_g, u[2], span_g, hint_g, &out->g);
   const nurbs::SurfacePoint& a = out->f.world;
   const nurbs::CurvePoint<3>& c = out->g.world;
-  const Eigen::Vector3d& N = out->f.N;
+  const Eigen::Vector3d& N = out->f.N_W;
   const Eigen::Vector3d d = c.C - a.S;
   out->d = d;
   out->F << d.dot(a.S_u), d.dot(a.S_v), N.dot(c.C1);
   out->F_u << -a.S_u.dot(a.S_u) + d.dot(a.S_uu), -a.S_v.dot(a.S_u) + d.dot(a.S_uv),
       c.C1.dot(a.S_u),                                                                        //
       -a.S_u.dot(a.S_v) + d.dot(a.S_uv), -a.S_v.dot(a.S_v) + d.dot(a.S_vv), c.C1.dot(a.S_v),  //
-      out->f.N_u.dot(c.C1), out->f.N_v.dot(c.C1), N.dot(c.C2);
+      out->f.N_W_u.dot(c.C1), out->f.N_W_v.dot(c.C1), N.dot(c.C2);
   out->grad << -d.dot(a.S_u), -d.dot(a.S_v), d.dot(c.C1);
   Eigen::Matrix3d& H = out->hess;
   H(0, 0) = a.S_u.dot(a.S_u) - d.dot(a.S_uu);
@@ -644,7 +644,7 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
     s->grad = e.grad;
     s->hess = e.hess;
     s->classify_scale = std::max(FirstFormScale(e.f.world), e.g.world.C1.squaredNorm());
-    s->penetrating = e.d.dot(e.f.N) < 0.0;
+    s->penetrating = e.d.dot(e.f.N_W) < 0.0;
   };
   Eigen::Vector3d lo, hi;
   lo << Lo(f), g.domain_begin();
@@ -659,8 +659,8 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
   out.u = r.x;
   out.p_f = e.f.world.S;
   out.p_g = e.g.world.C;
-  out.frame_f = ContactFrame(e.f);
-  out.beta = e.d.dot(out.frame_f.col(2));
+  out.R_WCf = ContactFrame(e.f);
+  out.beta = e.d.dot(out.R_WCf.col(2));
   if (std::any_of(r.active.begin(), r.active.end(), [](bool b) { return b; })) {
     out.beta = (out.beta < 0.0 ? -1.0 : 1.0) * e.d.norm();
   }

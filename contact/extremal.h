@@ -83,8 +83,8 @@ struct SurfaceSurfaceExtremum {
   Eigen::Vector3d direction;
   Eigen::Vector3d p_f, p_g;  ///< contact points, world (m)
   Eigen::Vector3d n_g;       ///< unit outward normal of g at p_g, world
-  Eigen::Matrix3d frame_f;   ///< contact frame of f at p_f (ContactFrame; NaN at a pole)
-  Eigen::Matrix3d frame_g;   ///< contact frame of g at p_g
+  Eigen::Matrix3d R_WCf;     ///< contact frame of f at p_f (ContactFrame; NaN at a pole)
+  Eigen::Matrix3d R_WCg;     ///< contact frame of g at p_g
   double alignment = 0.0;    ///< n_f·n_g: −1 for surfaces facing each other
   ExtremalStatus status = ExtremalStatus::kNotConverged;
   ExtremumKind kind = ExtremumKind::kDegenerate;
@@ -134,7 +134,7 @@ struct PointSurfaceExtremum {
   /// by that side.
   double distance = 0.0;
   Eigen::Vector3d p_f;
-  Eigen::Matrix3d frame_f;  ///< contact frame of f at p_f
+  Eigen::Matrix3d R_WCf;  ///< contact frame of f at p_f
   ExtremalStatus status = ExtremalStatus::kNotConverged;
   ExtremumKind kind = ExtremumKind::kDegenerate;
   std::array<bool, 2> at_bound{};
@@ -167,7 +167,7 @@ struct CurveSurfaceExtremum {
   /// that side.
   double beta = 0.0;
   Eigen::Vector3d p_f, p_g;
-  Eigen::Matrix3d frame_f;  ///< contact frame of f at p_f
+  Eigen::Matrix3d R_WCf;  ///< contact frame of f at p_f
   ExtremalStatus status = ExtremalStatus::kNotConverged;
   ExtremumKind kind = ExtremumKind::kDegenerate;
   std::array<bool, 3> at_bound{};

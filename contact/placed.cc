@@ -34,11 +34,11 @@ void EvaluatePlaced(const nurbs::NurbsSurface& surface, const BodyPose& pose, do
   w.S_uu = pose.R_WB * b.S_uu;
   w.S_uv = pose.R_WB * b.S_uv;
   w.S_vv = pose.R_WB * b.S_vv;
-  out->N = w.S_u.cross(w.S_v);
+  out->N_W = w.S_u.cross(w.S_v);
   out->pole = nurbs::IsDegenerate(b);
-  if (out->pole) out->limit_n = pose.R_WB * nurbs::UnitNormal(surface, u, v, b);
-  out->N_u = w.S_uu.cross(w.S_v) + w.S_u.cross(w.S_uv);
-  out->N_v = w.S_uv.cross(w.S_v) + w.S_u.cross(w.S_vv);
+  if (out->pole) out->n_W_limit = pose.R_WB * nurbs::UnitNormal(surface, u, v, b);
+  out->N_W_u = w.S_uu.cross(w.S_v) + w.S_u.cross(w.S_uv);
+  out->N_W_v = w.S_uv.cross(w.S_v) + w.S_u.cross(w.S_vv);
 }
 
 double BodyCurve::domain_begin() const {

@@ -23,13 +23,16 @@ struct BodyPose {
 struct PlacedSurfacePoint {
   nurbs::SurfacePoint body;   ///< in the body frame B
   nurbs::SurfacePoint world;  ///< in the world frame W (points moved, partials rotated)
-  Eigen::Vector3d N;          ///< S_u × S_v in W (unnormalized normal; 0 at a pole)
+  Eigen::Vector3d N_W;        ///< S_u × S_v in W (unnormalized normal; 0 at a pole)
   bool pole = false;          ///< a degenerate point of the parameterization (nurbs::IsDegenerate)
-  Eigen::Vector3d limit_n;    ///< at a pole: the limit unit normal in W (nurbs::UnitNormal)
+  Eigen::Vector3d n_W_limit;  ///< at a pole: the limit unit normal in W (nurbs::UnitNormal)
   /// Unit outward normal in W: N/|N|, or at a pole the limit normal (computed on demand: most
   /// evaluations inside a solve never need it).
-  Eigen::Vector3d unit_normal() const { return pole ? limit_n : Eigen::Vector3d(N.normalized()); }
-  Eigen::Vector3d N_u, N_v;  ///< its partials, S_uu × S_v + S_u × S_uv and S_uv × S_v + S_u × S_vv
+  Eigen::Vector3d unit_normal() const {
+    return pole ? n_W_limit : Eigen::Vector3d(N_W.normalized());
+  }
+  Eigen::Vector3d N_W_u,
+      N_W_v;  ///< its partials, S_uu × S_v + S_u × S_uv and S_uv × S_v + S_u × S_vv
 };
 
 /// Evaluates a body's surface at (u, v) to second order (fast path, allocation free).

@@ -179,8 +179,8 @@ void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
   // n_q: rotation of G and the change of (s, t).
   Eigen::Matrix<double, 3, 14> n_q = Eigen::Matrix<double, 3, 14>::Zero();
   n_q.rightCols<7>() = contact::DirectionJacobian(pg, pg.R_WB.transpose() * n);
-  n_q += UnitNormalPartial(st->eval.g.N, st->eval.g.N_u) * u_q.row(2) +
-         UnitNormalPartial(st->eval.g.N, st->eval.g.N_v) * u_q.row(3);
+  n_q += UnitNormalPartial(st->eval.g.N_W, st->eval.g.N_W_u) * u_q.row(2) +
+         UnitNormalPartial(st->eval.g.N_W, st->eval.g.N_W_v) * u_q.row(3);
   Matrix14 H = P.transpose() * n_q;
   // n·∂P/∂u u_q: the points' Jacobians change with the parameters.
   Eigen::Matrix<double, 2, 14> V_f = Eigen::Matrix<double, 2, 14>::Zero(),
@@ -232,7 +232,7 @@ void PointOnSurfaceTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
   Update(poses, st);
   const BodyPose& pa = PoseOf(poses, point_.body);
   const BodyPose& ps = PoseOf(poses, body_s_);
-  const Eigen::Vector3d n = st->eval.N.normalized();
+  const Eigen::Vector3d n = st->eval.N_W.normalized();
   r[0] = (pa.Point(point_.point) - st->eval.world.S).dot(n);
   J_a = n.transpose() * contact::PointJacobian(pa, point_.point);
   J_b = -n.transpose() * contact::PointJacobian(ps, st->eval.body.S);
@@ -247,7 +247,7 @@ void PointOnSurfaceTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
   const BodyPose& ps = PoseOf(poses, body_s_);
   const nurbs::SurfacePoint& b = st->eval.body;
   const nurbs::SurfacePoint& s = st->eval.world;
-  const Eigen::Vector3d n = st->eval.N.normalized();
+  const Eigen::Vector3d n = st->eval.N_W.normalized();
   const Eigen::Vector3d d = pa.Point(point_.point) - s.S;
   Eigen::Matrix<double, 3, 14> P;
   P << contact::PointJacobian(pa, point_.point), -contact::PointJacobian(ps, b.S);
@@ -265,8 +265,8 @@ void PointOnSurfaceTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
   if (std::abs(det) > 1e-12 * F_u.squaredNorm()) u_q = -F_u.inverse() * F_q;
   Eigen::Matrix<double, 3, 14> n_q = Eigen::Matrix<double, 3, 14>::Zero();
   n_q.rightCols<7>() = contact::DirectionJacobian(ps, ps.R_WB.transpose() * n);
-  n_q += UnitNormalPartial(st->eval.N, st->eval.N_u) * u_q.row(0) +
-         UnitNormalPartial(st->eval.N, st->eval.N_v) * u_q.row(1);
+  n_q += UnitNormalPartial(st->eval.N_W, st->eval.N_W_u) * u_q.row(0) +
+         UnitNormalPartial(st->eval.N_W, st->eval.N_W_v) * u_q.row(1);
   Matrix14 H = P.transpose() * n_q;
   Eigen::Matrix<double, 2, 14> V = Eigen::Matrix<double, 2, 14>::Zero();
   V.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(ps, b.S_u);

@@ -35,11 +35,8 @@ class Problem {
   int AddEquality(TermPtr term);
   /// Hard constraint r(q) ≥ 0 (componentwise).
   int AddInequality(TermPtr term);
-  /// Weighted objective ½ w |r(q)|² (w ≥ 0; change it later with set_weight).
+  /// Weighted objective ½ w |r(q)|² (w ≥ 0).
   int AddObjective(TermPtr term, double weight);
-  void set_weight(int objective, double w) {
-    objectives_[static_cast<size_t>(objective)].weight = w;
-  }
   /// Design objective to maximize with weight w ≥ 0 (E −= w f). Not for the servo loop: the
   /// objectives provided (Dexterity) allocate.
   void AddDesignObjective(std::shared_ptr<const DesignObjective> f, double weight);
@@ -48,7 +45,8 @@ class Problem {
     double weight = 1.0;
   };
   const std::vector<DesignEntry>& design_objectives() const { return design_; }
-  /// Weight of least astonishment (0 disables it).
+  /// Weight of least astonishment (0 disables it). Like the Add* calls, a building step: a
+  /// Problem is built, then only read (solvers and threads hold it const).
   void set_least_astonishment(double w) { least_astonishment_ = w; }
   double least_astonishment() const { return least_astonishment_; }
 

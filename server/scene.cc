@@ -401,7 +401,7 @@ void ParseDevice(const Node& root, double unit, Scene* out) {
       dv.origin = unit * d.At("origin").Vector<3>();
       dv.origin_given = true;
     }
-    if (d.Has("quaternion")) dv.rotation = Quaternion(d.At("quaternion")).toRotationMatrix();
+    if (d.Has("quaternion")) dv.R_WD = Quaternion(d.At("quaternion")).toRotationMatrix();
     if (d.Has("tool_offset")) dv.tool_offset = d.At("tool_offset").Vector<3>();
     dv.stiffness = d.Positive("stiffness", dv.stiffness);
     dv.damping = d.Positive("damping", dv.damping);

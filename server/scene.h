@@ -70,7 +70,8 @@ struct DeviceSpec {
   /// (the stylus starts where the part is held).
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   bool origin_given = false;
-  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  /// The device frame D's orientation in the world W (the scene's device.quaternion).
+  Eigen::Matrix3d R_WD = Eigen::Matrix3d::Identity();
   Eigen::Vector3d tool_offset = Eigen::Vector3d::Zero();  ///< stylus frame, device metres
   double stiffness = 300.0;                               ///< virtual coupling, N/m at the hand
   double damping = 1.0;                                   ///< N·s/m at the hand

@@ -213,7 +213,7 @@ Eigen::Vector3d ServoLoop::ToolPoint(const DeviceSample& d) const {
   const Eigen::Quaterniond Q(d.orientation[0], d.orientation[1], d.orientation[2],
                              d.orientation[3]);
   const Eigen::Vector3d p(d.position[0], d.position[1], d.position[2]);
-  return device_origin_ + dv.scale * dv.rotation * (p + Q * dv.tool_offset);
+  return device_origin_ + dv.scale * dv.R_WD * (p + Q * dv.tool_offset);
 }
 
 Eigen::Vector3d ServoLoop::GraspPoint() const {
@@ -275,7 +275,7 @@ bool ServoLoop::Follow(const DeviceSample& d, double dt) {
   if (grasp_orientation_) {
     const Eigen::Quaterniond Q_DT(d.orientation[0], d.orientation[1], d.orientation[2],
                                   d.orientation[3]);
-    const Eigen::Quaterniond Q_WT = Eigen::Quaterniond(dv.rotation) * Q_DT.normalized();
+    const Eigen::Quaterniond Q_WT = Eigen::Quaterniond(dv.R_WD) * Q_DT.normalized();
     const double angle = orientation_target_.angularDistance(Q_WT);
     const double max_angle = dv.follow_angular_speed * h;
     orientation_target_ =
@@ -326,9 +326,9 @@ void ServoLoop::RestoreGood() {
 void ServoLoop::StartSession(int64_t session_index) {
   session_index_ = session_index;
   ramp_ = 0.0;
-  force_.setZero();
-  torque_.setZero();
-  have_error_ = false;
+  f_D_.setZero();
+  tau_D_.setZero();
+  have_p_TG_D_ = false;
   last_seq_ = -1;
   last_answer_ns_ = 0;
   last_timeout_ns_ = 0;
@@ -344,8 +344,8 @@ void ServoLoop::FillWrench(const DeviceSample& d, int64_t now_ns, int8_t state,
   w->received_ns = d.received_ns;
   w->tick_start_ns = now_ns;
   for (int i = 0; i < 3; ++i) {
-    w->force[i] = force_[i];
-    w->torque[i] = options_.dof == 6 ? torque_[i] : 0.0;
+    w->force[i] = f_D_[i];
+    w->torque[i] = options_.dof == 6 ? tau_D_[i] : 0.0;
   }
   w->state = state;
 }
@@ -374,11 +374,46 @@ void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out
   const bool fresh =
       device && 1e-9 * static_cast<double>(now_ns - device->received_ns) <= options_.device_timeout;
   out->timed_out = device && !fresh;
+  bool fault = MoveScene(fresh ? device : nullptr, dt, inject, out);
 
+  // The ramp: up over ramp_time while the device is fresh, down while it is not (the force
+  // scales down with it and the scene holds at the last target); a fault restarts it from zero.
+  const double ramp_rate = dv.ramp_time > 0.0 ? dt / dv.ramp_time : 1.0;
+  const double previous = ramp_;
+  if (!fault) ramp_ = std::clamp(ramp_ + (fresh ? ramp_rate : -ramp_rate), 0.0, 1.0);
+  if (!fresh) {
+    RampDownSilent(device, now_ns, dt, previous, fault, out);
+    return;
+  }
+  timeout_final_sent_ = false;
+  if (device->seq == last_seq_) return;  // this sample is answered already
+  if (device->accepted > last_accepted_ + 1) {
+    out->unanswered = device->accepted - last_accepted_ - 1;
+  }
+  last_accepted_ = device->accepted;
+  const double dt_answer =
+      last_answer_ns_ > 0 ? 1e-9 * static_cast<double>(now_ns - last_answer_ns_) : 0.0;
+  Eigen::Vector3d f_D = Eigen::Vector3d::Zero();
+  Eigen::Vector3d tau_D = Eigen::Vector3d::Zero();
+  if (!fault && !Couple(*device, dt_answer, inject, &f_D, &tau_D)) {
+    fault = true;
+    ramp_ = 0.0;
+  }
+  if (!RenderLimited(f_D, tau_D, dt_answer)) fault = true;
+  out->fault = fault;
+  last_seq_ = device->seq;
+  last_answer_ns_ = now_ns;
+  last_answered_ = *device;
+  out->answered = true;
+  FillWrench(*device, now_ns, fault ? kFault : (ramp_ < 1.0 ? kRampingUp : kRunning), &out->wrench);
+}
+
+bool ServoLoop::MoveScene(const DeviceSample* fresh_device, double dt, const InjectedFault& inject,
+                          TickResult* out) {
   // 1. The grasp targets follow the device; 2. the warm solve; 3. any non-finite or absurd
   // intermediate restores the last good state (configuration, multipliers, tracked contacts,
   // targets) and sends the force to zero.
-  bool fault = fresh && !Follow(*device, dt);
+  bool fault = fresh_device && !Follow(*fresh_device, dt);
   if (inject.stage == InjectedFault::kGoal) target_[0] = inject.value;
   optimizer::SolveStats st;
   const TrackingCounts before = Tracking();
@@ -410,101 +445,90 @@ void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out
   out->tracked = after.tracked - before.tracked;
   out->solves = after.solves - before.solves;
   out->lost = after.lost - before.lost;
+  return fault;
+}
 
-  // The ramp: up over ramp_time while the device is fresh, down while it is not (the force
-  // scales down with it and the scene holds at the last target); a fault restarts it from zero.
-  const double ramp_rate = dv.ramp_time > 0.0 ? dt / dv.ramp_time : 1.0;
-  const double previous = ramp_;
-  if (!fault) ramp_ = std::clamp(ramp_ + (fresh ? ramp_rate : -ramp_rate), 0.0, 1.0);
-  if (!fresh) {
-    // Silent device: the force follows the ramp down, never faster than the rate limit; one
-    // timeout wrench per device period until it is zero (a driver still listening renders the
-    // ramp instead of holding its last force).
-    const Eigen::Vector3d goal =
-        previous > 0.0 ? Eigen::Vector3d(force_ * (ramp_ / previous)) : Eigen::Vector3d::Zero();
-    const double max_step = dv.max_force_rate * dt;
-    const Eigen::Vector3d step = goal - force_;
-    force_ += step.norm() > max_step ? Eigen::Vector3d(step * (max_step / step.norm())) : step;
-    torque_ *= previous > 0.0 ? ramp_ / previous : 0.0;
-    have_error_ = false;
-    const bool due = 1e-9 * static_cast<double>(now_ns - last_timeout_ns_) >= 1.0 / dv.device_rate;
-    if (device && last_seq_ >= 0 && due && !timeout_final_sent_) {
-      FillWrench(last_answered_, now_ns, fault ? kFault : kTimeout, &out->wrench);
-      out->answered = true;
-      last_timeout_ns_ = now_ns;
-      timeout_final_sent_ = force_.isZero(0.0) && torque_.isZero(0.0);
-    }
-    return;
+void ServoLoop::RampDownSilent(const DeviceSample* device, int64_t now_ns, double dt,
+                               double previous_ramp, bool fault, TickResult* out) {
+  // Silent device: the force follows the ramp down, never faster than the rate limit; one
+  // timeout wrench per device period until it is zero (a driver still listening renders the
+  // ramp instead of holding its last force).
+  const DeviceSpec& dv = scene_->device;
+  const double scale = previous_ramp > 0.0 ? ramp_ / previous_ramp : 0.0;
+  const Eigen::Vector3d goal = f_D_ * scale;
+  const double max_step = dv.max_force_rate * dt;
+  const Eigen::Vector3d step = goal - f_D_;
+  f_D_ += step.norm() > max_step ? Eigen::Vector3d(step * (max_step / step.norm())) : step;
+  tau_D_ *= scale;
+  have_p_TG_D_ = false;
+  const bool due = 1e-9 * static_cast<double>(now_ns - last_timeout_ns_) >= 1.0 / dv.device_rate;
+  if (device && last_seq_ >= 0 && due && !timeout_final_sent_) {
+    FillWrench(last_answered_, now_ns, fault ? kFault : kTimeout, &out->wrench);
+    out->answered = true;
+    last_timeout_ns_ = now_ns;
+    timeout_final_sent_ = f_D_.isZero(0.0) && tau_D_.isZero(0.0);
   }
-  timeout_final_sent_ = false;
-  if (device->seq == last_seq_) return;  // this sample is answered already
-  if (device->accepted > last_accepted_ + 1) {
-    out->unanswered = device->accepted - last_accepted_ - 1;
-  }
-  last_accepted_ = device->accepted;
+}
+
+bool ServoLoop::Couple(const DeviceSample& device, double dt_answer, const InjectedFault& inject,
+                       Eigen::Vector3d* f_D, Eigen::Vector3d* tau_D) {
   // Virtual coupling at the hand (device frame): the grasp point's offset from the tool point
   // (the device's own, not the following target: after a jump the force, not a teleport, tells
   // the hand where the part is), mapped back through the workspace scale, with damping on its
-  // rate of change over the server's time between answers.
-  const double dt_answer =
-      last_answer_ns_ > 0 ? 1e-9 * static_cast<double>(now_ns - last_answer_ns_) : 0.0;
-  Eigen::Vector3d force = Eigen::Vector3d::Zero();
-  Eigen::Vector3d torque = Eigen::Vector3d::Zero();
-  if (!fault) {
-    const Eigen::Vector3d error =
-        dv.rotation.transpose() * (GraspPoint() - ToolPoint(*device)) / dv.scale;
-    Eigen::Vector3d rate = Eigen::Vector3d::Zero();
-    if (have_error_ && dt_answer > 0.0) rate = (error - error_prev_) / std::max(dt_answer, 1e-4);
-    force = dv.stiffness * error + dv.damping * rate;
-    if (inject.stage == InjectedFault::kCoupling) force[0] = inject.value;
-    if (grasp_orientation_) {
-      // τ on the hand = R ¼ G(Q) ∂E/∂Q (the reaction of the body-frame torque −¼ G(Q) ∂E/∂Q
-      // that the orientation coupling exerts on the grasped body; seed 001 Eq. 5), device frame.
-      grasp_orientation_->Evaluate(poses_, grasp_orientation_state_, r9_, J9_, J9b_);
-      const contact::BodyPose& gp = poses_[static_cast<size_t>(grasp_at_.body)];
-      const Eigen::Vector4d dE_dQ =
-          0.5 * scene_->grasp.rotational_stiffness * J9_.rightCols<4>().transpose() * r9_;
-      torque = dv.rotation.transpose() * gp.R_WB *
-               contact::TorqueFromQuaternionForce(gp.q.tail<4>(), dE_dQ);
-    }
-    // A force beyond fault_force_factor × max_force (or one whose square overflows) is absurd:
-    // a fault like a non-finite one.
-    const double absurd = options_.fault_force_factor * dv.max_force;
-    if (!(force.squaredNorm() <= absurd * absurd) || !std::isfinite(torque.squaredNorm())) {
-      fault = true;
-      out->fault = true;
-      ramp_ = 0.0;
-      force.setZero();
-      torque.setZero();
-    } else {
-      error_prev_ = error;
-      have_error_ = true;
-    }
+  // rate of change over the server's time between answers: p_TG_D is the grasp point G's offset
+  // from the tool point T in the device frame D (device metres), f_D and tau_D the wrench on the
+  // hand in D.
+  const DeviceSpec& dv = scene_->device;
+  const Eigen::Vector3d p_TG_D =
+      dv.R_WD.transpose() * (GraspPoint() - ToolPoint(device)) / dv.scale;
+  Eigen::Vector3d v_TG_D = Eigen::Vector3d::Zero();
+  if (have_p_TG_D_ && dt_answer > 0.0) v_TG_D = (p_TG_D - p_TG_D_prev_) / std::max(dt_answer, 1e-4);
+  *f_D = dv.stiffness * p_TG_D + dv.damping * v_TG_D;
+  if (inject.stage == InjectedFault::kCoupling) (*f_D)[0] = inject.value;
+  if (grasp_orientation_) {
+    // τ on the hand = R ¼ G(Q) ∂E/∂Q (the reaction of the body-frame torque −¼ G(Q) ∂E/∂Q
+    // that the orientation coupling exerts on the grasped body; seed 001 Eq. 5), device frame.
+    grasp_orientation_->Evaluate(poses_, grasp_orientation_state_, r9_, J9_, J9b_);
+    const contact::BodyPose& X_WB = poses_[static_cast<size_t>(grasp_at_.body)];
+    const Eigen::Vector4d dE_dQ =
+        0.5 * scene_->grasp.rotational_stiffness * J9_.rightCols<4>().transpose() * r9_;
+    *tau_D = dv.R_WD.transpose() * X_WB.R_WB *
+             contact::TorqueFromQuaternionForce(X_WB.q.tail<4>(), dE_dQ);
   }
-  const double f = force.norm();
-  if (f > dv.max_force) force *= dv.max_force / f;
-  force *= ramp_;
-  torque *= ramp_;
+  // A force beyond fault_force_factor × max_force (or one whose square overflows) is absurd:
+  // a fault like a non-finite one.
+  const double absurd = options_.fault_force_factor * dv.max_force;
+  if (!(f_D->squaredNorm() <= absurd * absurd) || !std::isfinite(tau_D->squaredNorm())) {
+    f_D->setZero();
+    tau_D->setZero();
+    return false;
+  }
+  p_TG_D_prev_ = p_TG_D;
+  have_p_TG_D_ = true;
+  return true;
+}
+
+bool ServoLoop::RenderLimited(Eigen::Vector3d f_D, Eigen::Vector3d tau_D, double dt_answer) {
+  const DeviceSpec& dv = scene_->device;
+  const double f = f_D.norm();
+  if (f > dv.max_force) f_D *= dv.max_force / f;
+  f_D *= ramp_;
+  tau_D *= ramp_;
   // Force-rate limit between answers, on the server's clock, and at most two device periods'
   // worth per answer (a device holds its last force between answers: a late answer must not
   // step further than a punctual one could).
   const double max_step = dv.max_force_rate * std::min(dt_answer, 2.0 / dv.device_rate);
-  const Eigen::Vector3d step = force - force_;
+  const Eigen::Vector3d step = f_D - f_D_;
   const double s = step.norm();
-  force_ += s > max_step ? Eigen::Vector3d(step * (max_step / s)) : step;
-  if (force_.norm() > dv.max_force) force_ *= dv.max_force / force_.norm();
-  torque_ = torque;
-  if (!force_.allFinite() || !torque_.allFinite()) {  // unreachable: the last line of defence
-    force_.setZero();
-    torque_.setZero();
-    fault = true;
-    out->fault = true;
+  f_D_ += s > max_step ? Eigen::Vector3d(step * (max_step / s)) : step;
+  if (f_D_.norm() > dv.max_force) f_D_ *= dv.max_force / f_D_.norm();
+  tau_D_ = tau_D;
+  if (!f_D_.allFinite() || !tau_D_.allFinite()) {  // unreachable: the last line of defence
+    f_D_.setZero();
+    tau_D_.setZero();
+    return false;
   }
-  last_seq_ = device->seq;
-  last_answer_ns_ = now_ns;
-  last_answered_ = *device;
-  out->answered = true;
-  FillWrench(*device, now_ns, fault ? kFault : (ramp_ < 1.0 ? kRampingUp : kRunning), &out->wrench);
+  return true;
 }
 
 void ServoLoop::FillSnapshot(Snapshot* s) const {

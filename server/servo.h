@@ -93,8 +93,9 @@ class ServoLoop {
 
   const Eigen::VectorXd& q() const { return q_; }
   const Scene& scene() const { return *scene_; }
-  /// Maps a device sample to the world tool point (scene frame).
+  /// p_WT: a device sample's tool point T in the world W (m).
   Eigen::Vector3d ToolPoint(const DeviceSample& d) const;
+  /// p_WG: the grasp point G on the grasped body in the world W (m).
   Eigen::Vector3d GraspPoint() const;
   int active_contacts() const;
   const optimizer::Problem& problem() const { return *problem_; }
@@ -128,7 +129,22 @@ class ServoLoop {
   void RestoreGood();
   /// Starts a new device session's coupling: zero force, a new ramp.
   void StartSession(int64_t session_index);
-  /// Fills the wrench answering `d` (or the timeout wrench) from force_ and torque_.
+  /// The tick's steps. MoveScene: the targets follow a fresh device (nullptr: hold), the warm
+  /// solve, and the last good state restored on a fault (returned true).
+  bool MoveScene(const DeviceSample* fresh_device, double dt, const InjectedFault& inject,
+                 TickResult* out);
+  /// A silent device: the rendered wrench follows the ramp down within the rate limit; timeout
+  /// wrenches once per device period until it is zero.
+  void RampDownSilent(const DeviceSample* device, int64_t now_ns, double dt, double previous_ramp,
+                      bool fault, TickResult* out);
+  /// The virtual coupling's wrench on the hand in the device frame; false (and zero) when it is
+  /// absurd or not finite.
+  bool Couple(const DeviceSample& device, double dt_answer, const InjectedFault& inject,
+              Eigen::Vector3d* f_D, Eigen::Vector3d* tau_D);
+  /// Saturates, ramps and rate-limits the wrench into f_D_, tau_D_; false if they were not
+  /// finite (zeroed).
+  bool RenderLimited(Eigen::Vector3d f_D, Eigen::Vector3d tau_D, double dt_answer);
+  /// Fills the wrench answering `d` (or the timeout wrench) from f_D_ and tau_D_.
   void FillWrench(const DeviceSample& d, int64_t now_ns, int8_t state, WrenchSample* w) const;
 
   const Scene* scene_;
@@ -162,12 +178,14 @@ class ServoLoop {
   DeviceSample last_answered_;       ///< echoed by timeout wrenches
   bool timeout_final_sent_ = false;  ///< the zero-force timeout wrench has gone
   double good_violation_ = 0.0;      ///< violation of the last good tick
-  Eigen::Vector3d error_prev_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d force_ = Eigen::Vector3d::Zero(), torque_ = Eigen::Vector3d::Zero();
+  // The coupling (T the tool point, G the grasp point, D the device frame; device units): the
+  // last p_TG_D, and the wrench on the hand after the rate limit, f_D_ (N) and tau_D_ (N·m).
+  Eigen::Vector3d p_TG_D_prev_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d f_D_ = Eigen::Vector3d::Zero(), tau_D_ = Eigen::Vector3d::Zero();
   double ramp_ = 0.0;  ///< 0..1
   int64_t last_tick_ns_ = 0;
   int64_t ticks_ = 0;
-  bool have_error_ = false;
+  bool have_p_TG_D_ = false;
   Eigen::Matrix<double, 9, 1> r9_;
   Eigen::Matrix<double, 9, 7> J9_, J9b_;
 };

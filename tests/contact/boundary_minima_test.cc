@@ -158,7 +158,7 @@ Case MakeCase(std::mt19937_64& rng, Layout layout) {
     return ::testing::AssertionFailure()
            << "sampled truth too coarse: " << dist << " vs " << t.distance;
   // Random sheets are not oriented as facing solids: the side follows BoundarySide's rule.
-  const double side = BoundarySide(e.p_f - e.p_g, e.frame_f.col(2), e.frame_g.col(2));
+  const double side = BoundarySide(e.p_f - e.p_g, e.R_WCf.col(2), e.R_WCg.col(2));
   if (AnyHeld(e.at_bound) && std::abs(e.beta - side * dist) > 1e-12 * std::max(1.0, dist))
     return ::testing::AssertionFailure() << "beta " << e.beta << " is not the distance " << dist
                                          << " signed by the side " << side;

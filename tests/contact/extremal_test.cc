@@ -57,12 +57,12 @@ TEST(ExtremalTest, SpherePlaneSeparatedTouchingAndPenetratingUnderManyPoses) {
       EXPECT_NEAR(e.beta, height - 0.05, kPosTol) << "pose " << pose;
       EXPECT_NEAR(e.alignment, -1.0, 1e-14);
       // Contact frames: orthonormal, right-handed, z the outward normals (g's up, f's down).
-      for (const Eigen::Matrix3d* fr : {&e.frame_f, &e.frame_g}) {
+      for (const Eigen::Matrix3d* fr : {&e.R_WCf, &e.R_WCg}) {
         EXPECT_LT((fr->transpose() * *fr - Eigen::Matrix3d::Identity()).norm(), 1e-14);
         EXPECT_NEAR(fr->determinant(), 1.0, 1e-14);
       }
-      EXPECT_LT((e.frame_g.col(2) - x.linear() * Eigen::Vector3d::UnitZ()).norm(), 1e-14);
-      EXPECT_LT((e.frame_f.col(2) + x.linear() * Eigen::Vector3d::UnitZ()).norm(), 1e-12);
+      EXPECT_LT((e.R_WCg.col(2) - x.linear() * Eigen::Vector3d::UnitZ()).norm(), 1e-14);
+      EXPECT_LT((e.R_WCf.col(2) + x.linear() * Eigen::Vector3d::UnitZ()).norm(), 1e-12);
       const Eigen::Vector3d expect_g = x * Eigen::Vector3d(0.01, -0.02, 0.0);
       EXPECT_LT((e.p_g - expect_g).norm(), kPosTol);
       EXPECT_LT((e.p_f - (expect_g + x.linear() * Eigen::Vector3d(0, 0, height - 0.05))).norm(),

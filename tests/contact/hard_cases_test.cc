@@ -133,7 +133,7 @@ TEST(HardCasesTest, PoleOfARevolvedSurface) {
   EXPECT_EQ(e.kind, ExtremumKind::kMinimum);
   EXPECT_NEAR(e.beta, 0.01, 1e-15);
   EXPECT_LT((e.p_f - Eigen::Vector3d(0.01, 0.02, 0.01)).norm(), 1e-15);
-  EXPECT_LT((e.frame_f.col(2) + Eigen::Vector3d::UnitZ()).norm(), 1e-15);
+  EXPECT_LT((e.R_WCf.col(2) + Eigen::Vector3d::UnitZ()).norm(), 1e-15);
   nurbs::SpanHint h1, h2;
   SurfacePairEval ev;
   EvaluatePair(sphere, pf, plane, pg, e.u, &h1, &h2, &ev);

@@ -133,7 +133,7 @@ TEST(NonFiniteTest, ExtremalSolversReturnADefinedInvalidInputState) {
     EXPECT_TRUE(e.u.allFinite()) << what;
     EXPECT_FALSE(std::isnan(e.beta)) << what;
     EXPECT_TRUE(e.p_f.allFinite() && e.p_g.allFinite() && e.n_g.allFinite()) << what;
-    EXPECT_TRUE(e.frame_f.allFinite() && e.frame_g.allFinite()) << what;
+    EXPECT_TRUE(e.R_WCf.allFinite() && e.R_WCg.allFinite()) << what;
     EXPECT_STREQ(ToString(e.status), "invalid_input");
   };
   check(SolveSurfaceSurface(f, good, g, ground, Eigen::Vector4d(kNaN, 0.5, 0.5, 0.5)), "NaN seed");
@@ -147,7 +147,7 @@ TEST(NonFiniteTest, ExtremalSolversReturnADefinedInvalidInputState) {
       SolvePointSurface(Eigen::Vector3d(kNaN, 0, 0), g, ground, Eigen::Vector2d(0.5, 0.5));
   EXPECT_EQ(p.status, ExtremalStatus::kInvalidInput);
   EXPECT_FALSE(std::isnan(p.distance));
-  EXPECT_TRUE(p.u.allFinite() && p.p_f.allFinite() && p.frame_f.allFinite());
+  EXPECT_TRUE(p.u.allFinite() && p.p_f.allFinite() && p.R_WCf.allFinite());
   const PointSurfaceExtremum p2 =
       SolvePointSurface(Eigen::Vector3d(0, 0, 1), g, ground, Eigen::Vector2d(kNaN, 0.5));
   EXPECT_EQ(p2.status, ExtremalStatus::kInvalidInput);

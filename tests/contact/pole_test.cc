@@ -88,8 +88,8 @@ TEST(PoleTest, SurfaceSolvesReachTheGapOnAndNearAPole) {
       const bool reached =
           (e.status == ExtremalStatus::kConverged || e.status == ExtremalStatus::kAtBoundary) &&
           e.kind == ExtremumKind::kMinimum && std::abs(e.beta - kGap) < 1e-12 &&
-          (e.p_f - l.nearest).norm() < 1e-9 && e.frame_f.allFinite() &&
-          (e.frame_f.col(2) + l.n).norm() < 1e-9;
+          (e.p_f - l.nearest).norm() < 1e-9 && e.R_WCf.allFinite() &&
+          (e.R_WCf.col(2) + l.n).norm() < 1e-9;
       ok += reached;
       EXPECT_TRUE(reached) << "tilt " << tilt_deg << "° seed " << seed.transpose() << ": "
                            << ToString(e.status) << " " << ToString(e.kind) << " beta " << e.beta
@@ -116,7 +116,7 @@ TEST(PoleTest, PointSolvesReachThePole) {
           << ToString(e.status) << " tilt " << tilt_deg << " seed " << seed.transpose();
       EXPECT_NEAR(e.distance, kGap, 1e-12) << "tilt " << tilt_deg << " seed " << seed.transpose();
       EXPECT_LT((e.p_f - kRadius * dir).norm(), 1e-9);
-      EXPECT_LT((e.frame_f.col(2) - dir).norm(), 1e-9);
+      EXPECT_LT((e.R_WCf.col(2) - dir).norm(), 1e-9);
     }
   }
 }
