@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "base/check.h"
+
 namespace tangent::optimizer {
 
 BlockMatrix::BlockMatrix(int num_blocks, const std::vector<std::pair<int, int>>& pairs, bool sparse)
@@ -77,6 +79,11 @@ void BlockMatrix::AddToDiagonal(double value) {
     return;
   }
   for (int j = 0; j < num_blocks_; ++j) Block(j, j).diagonal().array() += value;
+}
+
+void BlockMatrix::AddDense(const Eigen::MatrixXd& A) {
+  TANGENT_CHECK(!sparse_ && A.rows() == dense_.rows() && A.cols() == dense_.cols());
+  dense_.triangularView<Eigen::Upper>() += A;
 }
 
 double BlockMatrix::MaxAbsDiagonal() const {

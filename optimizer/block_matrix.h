@@ -34,6 +34,8 @@ class BlockMatrix {
   void AddOffDiagonal(int i, int j, const Eigen::Matrix<double, 7, 7>& B);
   void SetZero();
   void AddToDiagonal(double value);
+  /// Adds a full symmetric n x n matrix (its upper triangle; dense storage only: offline).
+  void AddDense(const Eigen::MatrixXd& A);
   double MaxAbsDiagonal() const;
 
   const Eigen::MatrixXd& dense() const { return dense_; }

@@ -101,16 +101,19 @@ double ProblemEvaluator::Objective(const Eigen::VectorXd& q, const Eigen::Vector
 }
 
 void ProblemEvaluator::ObjectiveGradient(const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
-                                         const std::vector<Matrix7d>& M, Eigen::VectorXd* g) const {
+                                         const std::vector<Matrix7d>& M, Eigen::VectorXd* g,
+                                         Eigen::VectorXd* design) const {
   const double w = problem_.least_astonishment();
   for (size_t b = 0; b < M.size(); ++b) {
     const int o = 7 * static_cast<int>(b);
     g->segment<7>(o).noalias() = w * (M[b] * (q.segment<7>(o) - q_ref.segment<7>(o)));
   }
+  if (design) design->setZero(q.size());
   for (const Problem::DesignEntry& d : problem_.design_objectives()) {
     Eigen::VectorXd gd;
     d.f->Gradient(q, &gd);
     *g -= d.weight * gd;
+    if (design) *design -= d.weight * gd;
   }
   for (const Item& it : items_[kObjective]) {
     const auto r = values_[kObjective].segment(it.row, it.dim);

@@ -33,9 +33,10 @@ class ProblemEvaluator {
   /// M as 7 x 7 blocks per moving body (Mechanism::MetricBlocks).
   double Objective(const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
                    const std::vector<Matrix7d>& M) const;
-  /// ∇E into *g.
+  /// ∇E into *g; with `design`, also the design objectives' share of it, −Σ w ∇f (offline).
   void ObjectiveGradient(const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
-                         const std::vector<Matrix7d>& M, Eigen::VectorXd* g) const;
+                         const std::vector<Matrix7d>& M, Eigen::VectorXd* g,
+                         Eigen::VectorXd* design = nullptr) const;
   /// *g += scale · J_kindᵀ v (v indexed like the kind's stacked rows).
   void AddJacobianTransposeTimes(Kind kind, const Eigen::VectorXd& v, double scale,
                                  Eigen::VectorXd* g) const;

@@ -12,6 +12,7 @@ namespace tangent::optimizer {
 namespace {
 
 bool UseSparse(const SolverOptions& o, int n) {
+  if (o.design.enabled) return false;  // B is dense
   switch (o.linear) {
     case SolverOptions::Linear::kDense:
       return false;
@@ -60,6 +61,12 @@ Solver::Solver(const Problem& problem, const SolverOptions& options)
   for (const Problem::Entry& o : problem.objectives()) {
     gn_o_.segment(o.row, o.term->dim()).setConstant(o.weight);
   }
+  if (options.design.enabled) {
+    B_.setZero(n_, n_);
+    gd_.setZero(n_);
+    gd_old_.setZero(n_);
+    q_old_.setZero(n_);
+  }
   if (H_.is_sparse()) {
     ldlt_.analyzePattern(H_.sparse());  // The structure is fixed: analysed once.
   } else {
@@ -75,6 +82,48 @@ void Solver::Reset() {
   lambda_e_.setZero(problem_.num_equality_rows());
   lambda_i_.setZero(problem_.num_inequality_rows());
   mu_ = options_.penalty;
+  if (B_.size()) B_.setZero();
+  have_old_ = false;
+}
+
+void Solver::UpdateDesignCurvature(const Eigen::VectorXd& q) {
+  if (have_old_) {
+    // Damped BFGS (Powell): s the step, y the change of the design gradient; when sᵀy is small
+    // against sᵀBs (the model's curvature, or a direction of negative curvature), y is blended
+    // with Bs so that B stays positive definite.
+    const Eigen::VectorXd s = q - q_old_;
+    const Eigen::VectorXd y = gd_ - gd_old_;
+    const double ss = s.squaredNorm(), sy = s.dot(y);
+    if (ss > 0.0 && std::isfinite(sy)) {
+      if (B_.isZero(0.0)) {
+        // The first model: a multiple of the identity with the curvature seen along s
+        // (Nocedal & Wright's scaling), or the first step's own scale.
+        const double yy = y.squaredNorm();
+        const double b = sy > 0.0 ? yy / sy : std::sqrt(yy / ss);
+        B_.diagonal().setConstant(b > 0.0 ? b : 1.0);
+      }
+      const Eigen::VectorXd Bs = B_ * s;
+      const double sBs = s.dot(Bs);
+      const double theta = sy >= 0.2 * sBs ? 1.0 : 0.8 * sBs / (sBs - sy);
+      const Eigen::VectorXd r = theta * y + (1.0 - theta) * Bs;
+      const double sr = s.dot(r);
+      if (sBs > 0.0 && sr > 0.0) {
+        B_.noalias() -= (Bs * Bs.transpose()) / sBs;
+        B_.noalias() += (r * r.transpose()) / sr;
+      }
+    }
+  } else if (B_.isZero(0.0)) {
+    // Before any step: a scaled identity that makes the first step about first_step long.
+    const double g = gd_.norm();
+    if (g > 0.0) B_.diagonal().setConstant(g / options_.design.first_step);
+  }
+  q_old_ = q;
+  gd_old_ = gd_;
+  have_old_ = true;
+}
+
+double Solver::Lagrangian(const Eigen::VectorXd& q) const {
+  return ev_.Objective(q, q_prev_, M_) - lambda_e_.dot(ev_.c_e()) - lambda_i_.dot(ev_.c_i());
 }
 
 void Solver::AugmentedGradient() {
@@ -101,6 +150,7 @@ double Solver::NewtonMatrix() {
     H_.Block(static_cast<int>(b), static_cast<int>(b)) = w_la * M_[b];
   }
   ev_.AddGaussNewton(ProblemEvaluator::kObjective, gn_o_, &H_);
+  if (B_.size()) H_.AddDense(B_);  // design mode: the design objectives' curvature model
   // The objective's share of the matrix sets the damping's scale (1e-300: an empty objective).
   const double objective_scale = H_.MaxAbsDiagonal() + 1e-300;
   gn_e_.setConstant(mu_);
@@ -292,9 +342,18 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
   // from the linearized constraints. Near a warm start this is Newton on the KKT system
   // (quadratic convergence); the 1/μ block keeps redundant constraints regular.
   double best_score = std::numeric_limits<double>::infinity(), best_violation = 0.0, best_kkt = 0.0;
+  const bool design = options_.design.enabled;
+  double kkt_tolerance = options_.kkt_tolerance;
   for (st.iterations = 0; st.iterations < options_.max_iterations; ++st.iterations) {
     // ∇E once per iteration: the KKT residual and the step's right-hand side both use it.
-    ev_.ObjectiveGradient(q, q_prev_, M_, &grad_e_);
+    ev_.ObjectiveGradient(q, q_prev_, M_, &grad_e_, design ? &gd_ : nullptr);
+    if (design) {
+      if (st.iterations == 0) {
+        kkt_tolerance = options_.design.relative_kkt_tolerance *
+                        std::max(MaxAbs(grad_e_), options_.design.kkt_floor);
+      }
+      if (grad_e_.allFinite()) UpdateDesignCurvature(q);
+    }
     st.max_violation = Violation();
     kkt_ = grad_e_;  // ∇E − J_Eᵀλ_E − J_Iᵀλ_I at the current multipliers.
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &kkt_);
@@ -310,15 +369,14 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     // Converged: feasible, stationary, and complementary (no force on a separated contact).
     st.complementarity = Complementarity();
     if (st.max_violation <= options_.constraint_tolerance &&
-        st.complementarity <= options_.constraint_tolerance &&
-        st.kkt_residual <= options_.kkt_tolerance) {
+        st.complementarity <= options_.constraint_tolerance && st.kkt_residual <= kkt_tolerance) {
       st.converged = true;
       break;
     }
     // The best iterate so far, by the worse of its two residuals relative to their tolerances:
     // what an unconverged solve returns.
-    const double score = std::max(st.max_violation / options_.constraint_tolerance,
-                                  st.kkt_residual / options_.kkt_tolerance);
+    const double score =
+        std::max(st.max_violation / options_.constraint_tolerance, st.kkt_residual / kkt_tolerance);
     if (score < best_score) {
       best_score = score;
       q_best_ = q;
@@ -364,14 +422,20 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     linearized_e_ = ev_.c_e();  // c at the current point, before trial evaluations replace it
     linearized_i_ = ev_.c_i();
     const double step2 = step_.squaredNorm();
+    // Design mode: the Lagrangian at q and its slope along the step (kkt_ is its gradient).
+    const double lagrangian = design ? Lagrangian(q) : 0.0;
+    const double slope = design ? kkt_.dot(step_) : 0.0;
     double alpha = 1.0;
-    for (int k = 0; k < 8; ++k) {
+    for (int k = 0; k < (design ? 30 : 8); ++k) {
       q_try_ = q + alpha * step_;
       Normalize(&q_try_);
       ev_.Evaluate(q_try_);
       const double allowed = std::max({10.0 * st.max_violation, 1e3 * options_.constraint_tolerance,
                                        10.0 * alpha * alpha * step2});
-      if (Violation() <= allowed) break;
+      const bool sufficient =
+          !design || slope >= 0.0 ||
+          Lagrangian(q_try_) <= lagrangian + 1e-4 * alpha * slope + 1e-12 * std::abs(lagrangian);
+      if (Violation() <= allowed && sufficient) break;
       alpha *= 0.5;
     }
     // Multipliers from the linearized constraints at the step taken.
@@ -394,8 +458,8 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     st.kkt_residual = MaxAbs(kkt_);
   }
   if (!st.converged && best_score < std::numeric_limits<double>::infinity()) {
-    const double score = std::max(st.max_violation / options_.constraint_tolerance,
-                                  st.kkt_residual / options_.kkt_tolerance);
+    const double score =
+        std::max(st.max_violation / options_.constraint_tolerance, st.kkt_residual / kkt_tolerance);
     if (!(score <= best_score)) {  // (also when the last iterate's residuals are NaN)
       q = q_best_;
       lambda_e_ = lambda_e_best_;

@@ -41,6 +41,24 @@ struct SolverOptions {
   enum class Linear { kAuto, kDense, kSparse };
   Linear linear = Linear::kAuto;
   int sparse_threshold = 84;  ///< coordinates (12 moving bodies)
+  /// Offline design runs (tangent-opt, docs/offline.md), where a solve is taken to convergence
+  /// from a cold start instead of a warm servo step:
+  ///  - the design objectives (gradient only) get curvature from a damped BFGS model B of
+  ///    −Σ w ∇²f, built from their gradients along the steps taken (Powell's damping keeps B
+  ///    positive definite; the first step is scaled so that |Δq| ≈ first_step), added to the
+  ///    Newton matrix (dense);
+  ///  - convergence asks |KKT|∞ ≤ relative_kkt_tolerance · max(|∇E(q₀)|∞, kkt_floor): relative
+  ///    to the objective's own scale, so a small weight or a small objective is still solved to
+  ///    its digits (the absolute kkt_tolerance is not used);
+  ///  - a step is also halved while the Lagrangian E − λᵀc rises above its linear model's
+  ///    Armijo line (the violation safeguard stays).
+  /// Least astonishment is the Problem's: set it to 0 for a pure design solve.
+  struct Design {
+    bool enabled = false;
+    double relative_kkt_tolerance = 1e-9;
+    double kkt_floor = 1e-12;
+    double first_step = 0.05;
+  } design;
 };
 
 struct SolveStats {
@@ -122,6 +140,11 @@ class Solver {
   void SolveStep();
   void SecondOrderCheck(const Eigen::VectorXd& q, SolveStats* st);
   bool StepWithinTrustRegion() const;
+  /// Design mode: the BFGS update of B_ with the step from q_old_ to q and the change of the
+  /// design gradient (gd_ − gd_old_).
+  void UpdateDesignCurvature(const Eigen::VectorXd& q);
+  /// The Lagrangian E − λ_Eᵀc_E − λ_Iᵀc_I at the last Evaluate (design mode's line search).
+  double Lagrangian(const Eigen::VectorXd& q) const;
 
   const Problem& problem_;
   SolverOptions options_;
@@ -142,6 +165,11 @@ class Solver {
       ldlt_;
   std::vector<char> active_;  ///< inequality rows in the current step's active set
   double mu_ = 0.0;
+  // Design mode only (empty otherwise): the BFGS model of the design objectives' curvature, the
+  // design gradient now and at the previous iterate, and that iterate.
+  Eigen::MatrixXd B_;
+  Eigen::VectorXd gd_, gd_old_, q_old_;
+  bool have_old_ = false;
 };
 
 }  // namespace tangent::optimizer

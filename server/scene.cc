@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "base/json_node.h"
 #include "nurbs/json_io.h"
 #include "nurbs/primitives.h"
 #include "optimizer/goals.h"
@@ -23,67 +24,7 @@ namespace {
 using nlohmann::json;
 
 // A JSON value with its path for messages ("scenes/x.json: bodies[1].mass: ...").
-struct Node {
-  const json& j;
-  std::string where;  // file
-  std::string path;   // inside the file
-
-  [[noreturn]] void Fail(const std::string& what) const {
-    throw SceneError(where + ": " + (path.empty() ? "" : path + ": ") + what);
-  }
-  bool Has(const std::string& key) const { return j.is_object() && j.contains(key); }
-  Node At(const std::string& key) const {
-    if (!j.is_object()) Fail("must be an object");
-    if (!j.contains(key)) Fail("missing \"" + key + "\"");
-    return {j.at(key), where, path.empty() ? key : path + "." + key};
-  }
-  Node At(size_t i) const { return {j.at(i), where, path + "[" + std::to_string(i) + "]"}; }
-  size_t Size() const {
-    if (!j.is_array()) Fail("must be an array");
-    return j.size();
-  }
-  double Number() const {
-    if (!j.is_number()) Fail("must be a number");
-    const double x = j.get<double>();
-    if (!std::isfinite(x)) Fail("must be finite");
-    return x;
-  }
-  double Number(const std::string& key, double fallback) const {
-    return Has(key) ? At(key).Number() : fallback;
-  }
-  double Positive(const std::string& key, double fallback) const {
-    const double x = Number(key, fallback);
-    if (!(x > 0.0)) At(key).Fail("must be positive, got " + Format(x));
-    return x;
-  }
-  std::string String() const {
-    if (!j.is_string()) Fail("must be a string");
-    return j.get<std::string>();
-  }
-  std::string String(const std::string& key, const std::string& fallback) const {
-    return Has(key) ? At(key).String() : fallback;
-  }
-  bool Bool(const std::string& key, bool fallback) const {
-    if (!Has(key)) return fallback;
-    const Node n = At(key);
-    if (!n.j.is_boolean()) n.Fail("must be true or false");
-    return n.j.get<bool>();
-  }
-  template <int N>
-  Eigen::Matrix<double, N, 1> Vector() const {
-    if (!j.is_array() || static_cast<int>(j.size()) != N) {
-      Fail("must be an array of " + std::to_string(N) + " numbers");
-    }
-    Eigen::Matrix<double, N, 1> v;
-    for (int i = 0; i < N; ++i) v[i] = At(static_cast<size_t>(i)).Number();
-    return v;
-  }
-  static std::string Format(double x) {
-    std::ostringstream s;
-    s << x;
-    return s.str();
-  }
-};
+using Node = JsonNode<SceneError>;
 
 Eigen::Quaterniond Quaternion(const Node& n) {
   const Eigen::Vector4d q = n.Vector<4>();
@@ -199,6 +140,13 @@ int Scene::SurfaceIndex(const std::string& n) const {
   return -1;
 }
 
+int Scene::JointIndex(const std::string& n) const {
+  for (size_t i = 0; i < joints.size(); ++i) {
+    if (joints[i].name == n) return static_cast<int>(i);
+  }
+  return -1;
+}
+
 namespace {
 
 // The bodies: names, placements, masses, inertia, rigidity.
@@ -265,9 +213,13 @@ void ParseJoints(const Node& root, double unit, Scene* out) {
     for (size_t i = 0; i < joints.Size(); ++i) {
       const Node n = joints.At(i);
       JointSpec js;
+      js.name = n.String("name", "joint " + std::to_string(i));
+      if (s.JointIndex(js.name) >= 0) n.At("name").Fail("duplicate joint name \"" + js.name + "\"");
       js.type = n.At("type").String();
       const optimizer::Attachment a = ParseAttachment(n.At("a"), s, unit);
       const optimizer::Attachment b = ParseAttachment(n.At("b"), s, unit);
+      js.a = a;
+      js.b = b;
       if (a.body == b.body) n.Fail("joins a body to itself");
       if (js.type == "spherical") {
         js.term = optimizer::SphericalJoint(a, b);

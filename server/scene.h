@@ -13,6 +13,7 @@
 
 #include "nurbs/offset.h"
 #include "nurbs/surface.h"
+#include "optimizer/joints.h"
 #include "optimizer/mechanism.h"
 #include "optimizer/term.h"
 #include "server/device_filter.h"
@@ -43,7 +44,9 @@ struct ContactPairSpec {
 };
 
 struct JointSpec {
+  std::string name;  ///< the scene's "name", or "joint <index>"
   std::string type;  ///< spherical, revolute, universal, cylindrical, prismatic, fixed
+  optimizer::Attachment a, b;
   optimizer::TermPtr term;
   optimizer::TermPtr limits;  ///< revolute limits (may be null)
 };
@@ -112,9 +115,10 @@ struct Scene {
   double offset_max_edge = 0.5e-3;
   std::vector<std::string> load_log;  ///< certification lines etc.
 
-  /// Index of a body or surface by name, -1 if none.
+  /// Index of a body, surface or joint by name, -1 if none.
   int BodyIndex(const std::string& name) const;
   int SurfaceIndex(const std::string& name) const;
+  int JointIndex(const std::string& name) const;
 };
 
 /// Parses a scene. `where` names the source in error messages. @throws SceneError.
