@@ -118,6 +118,7 @@ class PointOnSurfaceTerm final : public Term {
                      const Eigen::Vector2d& seed);
 
   std::string name() const override { return "point_on_surface"; }
+  const Attachment& point() const { return point_; }
   int dim() const override { return 1; }
   int body_a() const override { return point_.body; }
   int body_b() const override { return body_s_; }

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "base/check.h"
 #include "contact/rigid.h"
 
 namespace tangent::optimizer {
@@ -289,6 +290,43 @@ TermPtr HalfSpaceGoal(const Attachment& at, const Eigen::Vector3d& o, const Eige
 }
 TermPtr DisjunctionGoal(std::vector<TermPtr> goals) {
   return std::make_shared<Disjunction>(std::move(goals));
+}
+
+namespace {
+
+class ShiftedTerm final : public Term {
+ public:
+  ShiftedTerm(TermPtr term, const Eigen::VectorXd& rhs) : term_(std::move(term)), rhs_(rhs) {}
+  std::string name() const override { return term_->name(); }
+  int dim() const override { return term_->dim(); }
+  int body_a() const override { return term_->body_a(); }
+  int body_b() const override { return term_->body_b(); }
+  std::unique_ptr<TermState> MakeState() const override { return term_->MakeState(); }
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* state, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override {
+    term_->Evaluate(poses, state, r, J_a, J_b);
+    r -= rhs_;
+  }
+  bool has_hessian() const override { return term_->has_hessian(); }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override {
+    term_->AddWeightedHessian(poses, state, w, h);
+  }
+
+ private:
+  TermPtr term_;
+  Eigen::VectorXd rhs_;
+};
+
+}  // namespace
+
+TermPtr Shifted(TermPtr term, const Eigen::VectorXd& rhs) {
+  TANGENT_REQUIRE(term != nullptr, "shifted term: null term");
+  TANGENT_REQUIRE(
+      rhs.size() == term->dim() && rhs.allFinite(),
+      "shifted term: rhs must have the term's " + std::to_string(term->dim()) + " finite values");
+  return std::make_shared<ShiftedTerm>(std::move(term), rhs);
 }
 
 }  // namespace tangent::optimizer

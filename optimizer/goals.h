@@ -99,5 +99,8 @@ TermPtr HalfSpaceGoal(const Attachment& at, const Eigen::Vector3d& origin,
 /// returned, zero-padded to the largest goal's dimension. Not differentiable where the active
 /// goal switches (the solver sees a different goal from then on).
 TermPtr DisjunctionGoal(std::vector<TermPtr> goals);
+/// r(q) − rhs (rhs: dim values): the constraint r(q) = rhs (or ≥ rhs) of a design study, whose
+/// multiplier is the optimum's sensitivity to rhs. State, Jacobians and curvature are r's.
+TermPtr Shifted(TermPtr term, const Eigen::VectorXd& rhs);
 
 }  // namespace tangent::optimizer

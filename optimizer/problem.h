@@ -94,9 +94,14 @@ class ProblemData {
   /// @throws std::invalid_argument naming the term otherwise.
   template <class T>
   typename T::State& Of(const T& term) {
+    return StateAs<typename T::State>(term);
+  }
+  /// The state of entry `term` as type S (for a term that wraps another, e.g. Shifted).
+  template <class S>
+  S& StateAs(const Term& term) {
     for (const auto& [t, st] : index_) {
       if (t != &term) continue;
-      if (auto* typed = dynamic_cast<typename T::State*>(st)) return *typed;
+      if (auto* typed = dynamic_cast<S*>(st)) return *typed;
     }
     throw std::invalid_argument("problem data: no state for term '" + term.name() + "'");
   }

@@ -359,6 +359,10 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &kkt_);
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, &kkt_);
     st.kkt_residual = MaxAbs(kkt_);
+    if (history_) {
+      history_->push_back(
+          {st.iterations, ev_.Objective(q, q_prev_, M_), st.max_violation, st.kkt_residual});
+    }
     if (!std::isfinite(st.max_violation) || !std::isfinite(st.kkt_residual)) {
       // At the start this is the input (a non-finite goal target, or a term that cannot be
       // evaluated there): a defined status, q and the multipliers as they came. Later it is a

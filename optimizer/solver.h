@@ -83,6 +83,14 @@ struct SolveStats {
   double reduced_hessian_min_eigenvalue = 0.0;
 };
 
+/// One iteration of a solve, for convergence histories (offline: Solver::set_history).
+struct IterationRecord {
+  int iteration = 0;
+  double objective = 0.0;  ///< E at the iterate
+  double violation = 0.0;
+  double kkt = 0.0;
+};
+
 /// Augmented Lagrangian with the PHR form for inequalities (design.md §4.5), in its primal-dual
 /// (stabilized SQP) form: each iteration is a Newton step on the KKT conditions
 ///   ∇E − J_Eᵀλ_E − J_Iᵀλ_I = 0,   c_E + (λ_E − λ̄_E)/μ = 0,   and the PHR-shifted inequalities,
@@ -118,6 +126,9 @@ class Solver {
     lambda_i_ = inequality;
   }
   bool sparse() const { return H_.is_sparse(); }
+  /// Appends one record per iteration to *history (nullptr: none). Offline only: it evaluates
+  /// the objective each iteration and allocates.
+  void set_history(std::vector<IterationRecord>* history) { history_ = history; }
   /// This solver's per-solve data of the problem: goal targets, tracked contacts (the Problem
   /// is shared and never changed; several solvers of one problem may run on different threads).
   ProblemData& data() { return ev_.data(); }
@@ -167,6 +178,7 @@ class Solver {
   double mu_ = 0.0;
   // Design mode only (empty otherwise): the BFGS model of the design objectives' curvature, the
   // design gradient now and at the previous iterate, and that iterate.
+  std::vector<IterationRecord>* history_ = nullptr;
   Eigen::MatrixXd B_;
   Eigen::VectorXd gd_, gd_old_, q_old_;
   bool have_old_ = false;

@@ -22,6 +22,8 @@ packages=(
   # (OCCT's CMake config links libtbb.so, which only libtbb-dev provides.)
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev libtbb-dev
   coinor-libipopt-dev libnlopt-cxx-dev
+  # Offline design runs across processes and machines (tangent-opt under mpirun), and their plots.
+  libopenmpi-dev openmpi-bin python3-matplotlib
 )
 
 missing=()

@@ -1,0 +1,490 @@
+#include "design/study.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "optimizer/contacts.h"
+#include "optimizer/goals.h"
+#include "optimizer/joints.h"
+
+namespace tangent::design {
+
+namespace {
+
+using optimizer::DesignObjective;
+using optimizer::Problem;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// −f, for a measure minimized (design objectives are maximized with a positive weight).
+class Negated final : public DesignObjective {
+ public:
+  explicit Negated(std::shared_ptr<const DesignObjective> f) : f_(std::move(f)) {}
+  std::string name() const override { return "-" + f_->name(); }
+  double Value(const Eigen::VectorXd& q) const override { return -f_->Value(q); }
+  void Gradient(const Eigen::VectorXd& q, Eigen::VectorXd* g) const override {
+    f_->Gradient(q, g);
+    *g = -*g;
+  }
+
+ private:
+  std::shared_ptr<const DesignObjective> f_;
+};
+
+optimizer::DexterityMeasure MeasureOf(const std::string& m) {
+  if (m == "inverse_condition") return optimizer::DexterityMeasure::kInverseCondition;
+  if (m == "force_transmission") return optimizer::DexterityMeasure::kForceTransmission;
+  return optimizer::DexterityMeasure::kDexterity;
+}
+
+double Measure(const optimizer::Dexterity::Measures& m, const std::string& name) {
+  if (name == "inverse_condition") return m.inverse_condition;
+  if (name == "force_transmission") return m.force_transmission;
+  return m.dexterity;
+}
+
+// The parameters of the point of `surface` nearest to x_W, over a grid of samples (a seed for
+// the tracked closest point).
+Eigen::Vector2d NearestSample(const nurbs::NurbsSurface& surface, const contact::BodyPose& pose,
+                              const Eigen::Vector3d& x_W) {
+  const double u0 = surface.knots_u().domain_begin(), u1 = surface.knots_u().domain_end();
+  const double v0 = surface.knots_v().domain_begin(), v1 = surface.knots_v().domain_end();
+  constexpr int kGrid = 48;
+  Eigen::Vector2d best(u0, v0);
+  double best_d = std::numeric_limits<double>::infinity();
+  for (int i = 0; i <= kGrid; ++i) {
+    for (int j = 0; j <= kGrid; ++j) {
+      const double u = u0 + (u1 - u0) * i / kGrid, v = v0 + (v1 - v0) * j / kGrid;
+      const double d = (pose.Point(surface.Evaluate(u, v, 0).S) - x_W).squaredNorm();
+      if (d < best_d) {
+        best_d = d;
+        best = {u, v};
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+Study::Study(RunSpec run)
+    : run_(std::move(run)), joints_only_(run_.scene->mechanism), problem_(run_.scene->mechanism) {
+  const server::Scene& s = *run_.scene;
+  const optimizer::Mechanism& mech = s.mechanism;
+  for (const Problem::Entry& e : problem_.equalities()) {  // the unit quaternions
+    equality_names_.push_back({"unit quaternion " + mech.body(e.term->body_a()).name, "quaternion",
+                               e.row, e.term->dim(), -1});
+  }
+  for (size_t j = 0; j < s.joints.size(); ++j) {
+    const server::JointSpec& js = s.joints[j];
+    joints_only_.AddEquality(js.term);
+    const int k = problem_.AddEquality(js.term);
+    equality_names_.push_back({"joint " + js.name, "joint",
+                               problem_.equalities()[static_cast<size_t>(k)].row, js.term->dim(),
+                               static_cast<int>(j)});
+    if (js.limits) {
+      const int l = problem_.AddInequality(js.limits);
+      inequality_names_.push_back({"limit " + js.name, "limit",
+                                   problem_.inequalities()[static_cast<size_t>(l)].row, 2,
+                                   static_cast<int>(j)});
+    }
+  }
+  for (const BoundSpec& b : run_.bounds) {
+    const server::JointSpec& js = s.joints[static_cast<size_t>(b.joint)];
+    const int l = problem_.AddInequality(optimizer::RevoluteLimits(js.a, js.b, b.lo, b.hi));
+    inequality_names_.push_back({"bound " + js.name, "bound",
+                                 problem_.inequalities()[static_cast<size_t>(l)].row, 2, b.joint});
+  }
+  for (const ConstraintSpec& c : run_.constraints) {
+    if (c.inequality) {
+      const int k = problem_.AddInequality(c.term);
+      inequality_names_.push_back({c.name, "constraint",
+                                   problem_.inequalities()[static_cast<size_t>(k)].row,
+                                   c.term->dim(), -1});
+    } else {
+      const int k = problem_.AddEquality(c.term);
+      equality_names_.push_back({c.name, "constraint",
+                                 problem_.equalities()[static_cast<size_t>(k)].row, c.term->dim(),
+                                 -1});
+    }
+  }
+  // F = Σ w m is maximized (E = −F) or minimized (E = F).
+  sign_ = run_.maximize ? -1.0 : 1.0;
+  for (const MeasureSpec& m : run_.terms) {
+    if (m.measure == "grasp_distance") {
+      auto goal = optimizer::MakePositionGoal(m.end_effector, m.target);
+      // A cost (the run file's sign is checked): E gets ½ |w| |P − target|² either way.
+      problem_.AddObjective(goal, std::abs(m.weight));
+      distance_terms_.push_back(goal);
+      dexterity_.push_back(nullptr);
+      continue;
+    }
+    std::vector<std::pair<optimizer::Attachment, optimizer::Attachment>> joints;
+    for (int j : m.joints) {
+      joints.emplace_back(s.joints[static_cast<size_t>(j)].a, s.joints[static_cast<size_t>(j)].b);
+    }
+    auto d = std::make_shared<optimizer::Dexterity>(joints_only_, m.end_effector, joints);
+    std::shared_ptr<const DesignObjective> f =
+        optimizer::MakeDexterityObjective(d, MeasureOf(m.measure));
+    const double c = run_.maximize ? m.weight : -m.weight;  // E −= c f
+    if (c > 0.0) {
+      problem_.AddDesignObjective(f, c);
+    } else {
+      problem_.AddDesignObjective(std::make_shared<Negated>(f), -c);
+    }
+    dexterity_.push_back(d);
+    distance_terms_.push_back(nullptr);
+  }
+  problem_.set_least_astonishment(0.0);
+}
+
+double Study::Objective(const Eigen::VectorXd& q,
+                        std::vector<std::pair<std::string, double>>* measures) const {
+  std::vector<contact::BodyPose> poses;
+  run_.scene->mechanism.Poses(q, &poses);
+  double f = 0.0;
+  for (size_t k = 0; k < run_.terms.size(); ++k) {
+    const MeasureSpec& m = run_.terms[k];
+    double value;
+    if (dexterity_[k]) {
+      value = Measure(dexterity_[k]->Evaluate(q, false), m.measure);
+    } else {
+      const contact::BodyPose& pose = poses[static_cast<size_t>(m.end_effector.body)];
+      value = 0.5 * (pose.Point(m.end_effector.point) - m.target).squaredNorm();
+    }
+    f += m.weight * value;
+    if (measures) measures->emplace_back(m.measure, value);
+  }
+  return f;
+}
+
+std::map<int, double> Study::StartAngles(int index) const {
+  if (index < static_cast<int>(run_.starts.size())) {
+    return run_.starts[static_cast<size_t>(index)].angles;
+  }
+  // Seeded by (seed, case index) alone: the same angles on any thread or rank.
+  const uint64_t k = static_cast<uint64_t>(index);
+  std::seed_seq seq{static_cast<uint32_t>(run_.seed), static_cast<uint32_t>(run_.seed >> 32),
+                    static_cast<uint32_t>(k), static_cast<uint32_t>(k >> 32)};
+  std::mt19937_64 gen(seq);
+  std::map<int, double> angles;
+  for (int j : run_.random_joints) {
+    double lo = -std::numbers::pi, hi = std::numbers::pi;
+    for (const BoundSpec& b : run_.bounds) {
+      if (b.joint == j) lo = b.lo, hi = b.hi;
+    }
+    // (uniform_real_distribution's algorithm is the library's: fixed for one build.)
+    const double t = static_cast<double>(gen() >> 11) * 0x1.0p-53;
+    angles[j] = lo + (hi - lo) * t;
+  }
+  return angles;
+}
+
+Eigen::VectorXd Study::Assemble(const std::map<int, double>& angles, bool* ok) const {
+  // The joints at the start angles: minimize Σ (θ_j − target_j)² subject to the scene's joints,
+  // from the scene's initial pose (repeated warm solves: each is anchored at its start). Then,
+  // from there, the same with the run's constraints and bounds too, so that the design solve
+  // starts feasible (a cold start far from its constraints drives the multipliers up before
+  // the objective is seen). When that fails (an infeasible set) the joints-only start is kept:
+  // the design solve then reports the conflict.
+  const server::Scene& s = *run_.scene;
+  auto solve = [&](bool constrained, Eigen::VectorXd* q) {
+    Problem p(s.mechanism);
+    for (const server::JointSpec& js : s.joints) {
+      p.AddEquality(js.term);
+      if (constrained && js.limits) p.AddInequality(js.limits);
+    }
+    if (constrained) {
+      for (const BoundSpec& b : run_.bounds) {
+        const server::JointSpec& js = s.joints[static_cast<size_t>(b.joint)];
+        p.AddInequality(optimizer::RevoluteLimits(js.a, js.b, b.lo, b.hi));
+      }
+      for (const ConstraintSpec& c : run_.constraints) {
+        if (c.inequality) {
+          p.AddInequality(c.term);
+        } else {
+          p.AddEquality(c.term);
+        }
+      }
+    }
+    for (const auto& [j, theta] : angles) {
+      const server::JointSpec& js = s.joints[static_cast<size_t>(j)];
+      // (θ − lo)² + (hi − θ)² is least at the middle of [lo, hi]: a goal on the angle.
+      p.AddObjective(optimizer::RevoluteLimits(js.a, js.b, theta - 1e-3, theta + 1e-3), 1.0);
+    }
+    p.set_least_astonishment(1e-9);
+    optimizer::SolverOptions o;
+    o.max_iterations = 200;
+    o.kkt_tolerance = 1e-12;
+    optimizer::Solver solver(p, o);
+    if (constrained) SeedContacts(*q, &solver.data());
+    optimizer::SolveStats st;
+    for (int round = 0; round < 20; ++round) {
+      st = solver.Solve(q);
+      if (st.converged && st.iterations <= 1) break;
+    }
+    return st.max_violation <= 1e-9 && q->allFinite();
+  };
+  Eigen::VectorXd q = s.mechanism.InitialCoordinates();
+  *ok = solve(false, &q);
+  if (!*ok) return q;
+  Eigen::VectorXd constrained = q;
+  if (solve(true, &constrained)) q = constrained;
+  return q;
+}
+
+void Study::SeedContacts(const Eigen::VectorXd& q, optimizer::ProblemData* data) const {
+  // Point-on-surface constraints track the closest point: seed each at this configuration's.
+  const server::Scene& s = *run_.scene;
+  std::vector<contact::BodyPose> poses;
+  s.mechanism.Poses(q, &poses);
+  for (const ConstraintSpec& c : run_.constraints) {
+    if (c.surface < 0) continue;
+    const auto& term = dynamic_cast<const optimizer::PointOnSurfaceTerm&>(*c.inner);
+    const server::SceneSurface& ss = s.surfaces[static_cast<size_t>(c.surface)];
+    auto& st = data->StateAs<optimizer::PointOnSurfaceTerm::State>(*c.term);
+    st.u = NearestSample(ss.surface, poses[static_cast<size_t>(ss.body)],
+                         poses[static_cast<size_t>(term.body_a())].Point(term.point().point));
+    st.valid = false;
+  }
+}
+
+Eigen::VectorXd Study::StartConfiguration(int index, bool* ok) const {
+  return Assemble(StartAngles(index), ok);
+}
+
+CaseResult Study::Solve(int index) const {
+  using Clock = std::chrono::steady_clock;
+  const server::Scene& s = *run_.scene;
+  CaseResult r;
+  r.index = index;
+  const std::map<int, double> angles = StartAngles(index);
+  for (const auto& [j, theta] : angles) {
+    r.start_deg.emplace_back(s.joints[static_cast<size_t>(j)].name, theta / kDeg);
+  }
+  const auto t0 = Clock::now();
+  bool assembled = false;
+  Eigen::VectorXd q = Assemble(angles, &assembled);
+  if (!assembled) {
+    r.status = "start failed: the scene's joints could not be assembled at these angles";
+    r.q = q;
+    return r;
+  }
+  optimizer::SolverOptions o;
+  o.design.enabled = true;
+  o.design.relative_kkt_tolerance = run_.relative_kkt_tolerance;
+  o.max_iterations = run_.max_iterations;
+  o.constraint_tolerance = run_.constraint_tolerance;
+  optimizer::Solver solver(problem_, o);
+  SeedContacts(q, &solver.data());
+  std::vector<contact::BodyPose> poses;
+  solver.set_history(&r.history);
+  const optimizer::SolveStats st = solver.Solve(&q);
+  r.time_ms = 1e3 * std::chrono::duration<double>(Clock::now() - t0).count();
+  for (optimizer::IterationRecord& h : r.history) h.objective *= sign_;
+  r.q = q;
+  r.converged = st.converged;
+  r.violation = st.max_violation;
+  r.kkt = st.kkt_residual;
+  r.iterations = st.iterations;
+  r.objective = Objective(q, &r.measures);
+  s.mechanism.Poses(q, &poses);
+  for (const server::JointSpec& js : s.joints) {
+    if (js.type == "revolute") {
+      r.joints_deg.emplace_back(js.name, optimizer::RevoluteAngle(js.a, js.b, poses) / kDeg);
+    }
+  }
+  for (const ConstraintSpec& c : run_.constraints) {
+    if (c.surface < 0) continue;
+    r.contacts.emplace_back(c.name,
+                            solver.data().StateAs<optimizer::PointOnSurfaceTerm::State>(*c.term).u);
+  }
+  // Sensitivities: ∇E = Jᵀλ, so dE*/db = λ for r(q) = b (or ≥ b), and F = sign_ · E.
+  const Eigen::VectorXd& le = solver.equality_multipliers();
+  const Eigen::VectorXd& li = solver.inequality_multipliers();
+  for (const RowName& n : equality_names_) {
+    if (n.kind == "quaternion") continue;
+    for (int k = 0; k < n.dim; ++k) {
+      const double l = le[n.first_row + k];
+      r.sensitivities.push_back({n.constraint, k, "rhs", l, sign_ * l, true});
+    }
+  }
+  for (const RowName& n : inequality_names_) {
+    for (int k = 0; k < n.dim; ++k) {
+      const double l = li[n.first_row + k];
+      if (n.kind == "constraint") {
+        r.sensitivities.push_back({n.constraint, k, "rhs", l, sign_ * l, l > 0.0});
+      } else {  // θ − lo ≥ 0 (row 0), hi − θ ≥ 0 (row 1); per degree
+        r.sensitivities.push_back({n.constraint, k, k == 0 ? "min_deg" : "max_deg", l,
+                                   (k == 0 ? 1.0 : -1.0) * sign_ * l * kDeg, l > 0.0});
+      }
+    }
+  }
+  // Status: an optimum, or why not (an infeasible set names its violated rows).
+  optimizer::ProblemEvaluator ev(problem_, false);
+  ev.Evaluate(q);
+  // Violated rows, worst first (at a least-violation point the conflict is spread over the rows
+  // involved; the constraint that cannot be met leads).
+  std::vector<std::pair<double, std::string>> violated;
+  auto check = [&](const std::vector<RowName>& names, const Eigen::VectorXd& c, bool ineq) {
+    for (const RowName& n : names) {
+      for (int k = 0; k < n.dim; ++k) {
+        const double v = c[n.first_row + k];
+        const double bad = ineq ? -v : std::abs(v);
+        if (bad > 1e3 * run_.constraint_tolerance) {
+          violated.emplace_back(bad, n.constraint + " row " + std::to_string(k) + ": " +
+                                         (ineq ? "below zero by " : "off by ") +
+                                         nlohmann::json(bad).dump());
+        }
+      }
+    }
+  };
+  check(equality_names_, ev.c_e(), false);
+  check(inequality_names_, ev.c_i(), true);
+  std::stable_sort(violated.begin(), violated.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (const auto& [size, text] : violated) r.violated.push_back(text);
+  if (st.converged) {
+    r.status = "optimum";
+  } else if (!r.violated.empty()) {
+    ReportInfeasible(&r);
+  } else {
+    r.status = "not converged";
+  }
+  return r;
+}
+
+void Study::ReportInfeasible(CaseResult* r) const {
+  // The least-violation point with the mechanism intact: the scene's joints, limits and the
+  // run's bounds and inequalities hard, the run's equalities as least squares ½ Σ |r − rhs|².
+  // Those left unmet there are what cannot be had together with the mechanism.
+  const server::Scene& s = *run_.scene;
+  Problem p(s.mechanism);
+  for (const server::JointSpec& js : s.joints) {
+    p.AddEquality(js.term);
+    if (js.limits) p.AddInequality(js.limits);
+  }
+  for (const BoundSpec& b : run_.bounds) {
+    const server::JointSpec& js = s.joints[static_cast<size_t>(b.joint)];
+    p.AddInequality(optimizer::RevoluteLimits(js.a, js.b, b.lo, b.hi));
+  }
+  std::vector<int> soft;
+  for (size_t k = 0; k < run_.constraints.size(); ++k) {
+    const ConstraintSpec& c = run_.constraints[k];
+    if (c.inequality) {
+      p.AddInequality(c.term);
+    } else {
+      p.AddObjective(c.term, 1.0);
+      soft.push_back(static_cast<int>(k));
+    }
+  }
+  p.set_least_astonishment(1e-9);
+  optimizer::SolverOptions o;
+  o.max_iterations = 200;
+  o.kkt_tolerance = 1e-12;
+  optimizer::Solver solver(p, o);
+  SeedContacts(r->q, &solver.data());
+  Eigen::VectorXd q = r->q;
+  bool assembled = false;
+  const Eigen::VectorXd start = Assemble({}, &assembled);
+  if (assembled) q = start;  // (from the scene's pose: the diverged iterate may be far off)
+  optimizer::SolveStats st;
+  for (int round = 0; round < 20; ++round) {
+    st = solver.Solve(&q);
+    if (st.converged && st.iterations <= 1) break;
+  }
+  r->status = "infeasible";
+  if (!(st.max_violation <= 1e-9)) return;  // the hard set itself conflicts: rows as found
+  optimizer::ProblemEvaluator ev(p, false);
+  ev.Evaluate(q);
+  std::vector<std::string> unmet;
+  double worst = 0.0;
+  for (size_t k = 0; k < soft.size(); ++k) {
+    const ConstraintSpec& c = run_.constraints[static_cast<size_t>(soft[k])];
+    const double off = ev.r_o().segment(p.objectives()[k].row, c.term->dim()).cwiseAbs().maxCoeff();
+    if (off > 1e3 * run_.constraint_tolerance) {
+      unmet.push_back(c.name + ": off by " + nlohmann::json(off).dump() +
+                      " at the least-violation point with the mechanism intact");
+      worst = std::max(worst, off);
+    }
+  }
+  if (unmet.empty()) return;
+  r->violated = unmet;
+  r->q = q;
+  r->violation = worst;
+  r->measures.clear();
+  r->objective = Objective(q, &r->measures);
+  r->converged = false;
+}
+
+nlohmann::json Study::ToJson(const CaseResult& c) const {
+  nlohmann::json j;
+  j["case"] = c.index;
+  j["status"] = c.status;
+  nlohmann::json start = nlohmann::json::object();
+  for (const auto& [name, deg] : c.start_deg) start[name] = deg;
+  j["start_deg"] = start;
+  j["converged"] = c.converged;
+  j["objective"] = c.objective;
+  nlohmann::json measures = nlohmann::json::array();
+  for (const auto& [name, value] : c.measures) measures.push_back({{name, value}});
+  j["measures"] = measures;
+  j["violation"] = c.violation;
+  j["kkt"] = c.kkt;
+  j["iterations"] = c.iterations;
+  j["time_ms"] = c.time_ms;
+  nlohmann::json joints = nlohmann::json::object();
+  for (const auto& [name, deg] : c.joints_deg) joints[name] = deg;
+  j["joints_deg"] = joints;
+  nlohmann::json contacts = nlohmann::json::object();
+  for (const auto& [name, u] : c.contacts) contacts[name] = {u[0], u[1]};
+  j["contacts_uv"] = contacts;
+  j["q"] = std::vector<double>(c.q.data(), c.q.data() + c.q.size());
+  nlohmann::json sens = nlohmann::json::array();
+  for (const Sensitivity& s : c.sensitivities) {
+    sens.push_back({{"constraint", s.constraint},
+                    {"row", s.row},
+                    {"wrt", s.wrt},
+                    {"multiplier", s.multiplier},
+                    {"d_objective", s.derivative},
+                    {"active", s.active}});
+  }
+  j["sensitivities"] = sens;
+  nlohmann::json history = nlohmann::json::array();
+  for (const optimizer::IterationRecord& h : c.history) {
+    history.push_back({h.iteration, h.objective, h.violation, h.kkt});
+  }
+  j["history"] = {{"columns", {"iteration", "objective", "violation", "kkt"}}, {"rows", history}};
+  j["violated"] = c.violated;
+  return j;
+}
+
+nlohmann::json Study::Header() const {
+  const server::Scene& s = *run_.scene;
+  nlohmann::json j;
+  j["run"] = run_.path;
+  j["scene"] = run_.scene_path;
+  j["sense"] = run_.maximize ? "maximize" : "minimize";
+  nlohmann::json terms = nlohmann::json::array();
+  for (const MeasureSpec& m : run_.terms) {
+    nlohmann::json t = {{"measure", m.measure}, {"weight", m.weight}};
+    std::vector<std::string> joints;
+    for (int k : m.joints) joints.push_back(s.joints[static_cast<size_t>(k)].name);
+    if (!joints.empty()) t["joints"] = joints;
+    terms.push_back(t);
+  }
+  j["objective"] = terms;
+  std::vector<std::string> constraints;
+  for (const ConstraintSpec& c : run_.constraints) constraints.push_back(c.name);
+  j["constraints"] = constraints;
+  j["variables"] = "configuration: " + std::to_string(s.mechanism.num_moving()) +
+                   " moving bodies x 7 maximal coordinates";
+  j["cases"] = num_cases();
+  j["seed"] = run_.seed;
+  return j;
+}
+
+}  // namespace tangent::design

@@ -1,0 +1,100 @@
+#pragma once
+
+// A design study (tangent-opt): the run's problem built once from the scene and the run file
+// and shared read-only by every case; each case (a start) assembles its start configuration and
+// is solved to convergence by the solver's design mode on its own data, so cases run on any
+// number of threads or MPI ranks with bit-identical results.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "design/run_file.h"
+#include "optimizer/dexterity.h"
+#include "optimizer/problem.h"
+#include "optimizer/solver.h"
+
+namespace tangent::design {
+
+/// d F*/d b for one constraint row or bound, F the run's objective.
+struct Sensitivity {
+  std::string constraint;   ///< "tip on plane", "joint elbow", "bound elbow min" ...
+  int row = 0;              ///< the row within the constraint
+  std::string wrt;          ///< what b is: "rhs" (r(q) = b, or ≥ b), "min_deg", "max_deg"
+  double multiplier = 0.0;  ///< the solver's λ for the row (∇E = Jᵀλ)
+  double derivative = 0.0;  ///< d F*/d b (per metre or radian of rhs, per degree of a bound)
+  bool active = true;       ///< inequalities: λ > 0
+};
+
+struct CaseResult {
+  int index = 0;
+  std::vector<std::pair<std::string, double>> start_deg;  ///< the start's joint angles
+  std::string status;  ///< "optimum", "not converged", "infeasible", "start failed: ..."
+  bool converged = false;
+  double objective = 0.0;                                ///< F at the result
+  std::vector<std::pair<std::string, double>> measures;  ///< each objective term's measure
+  double violation = 0.0, kkt = 0.0;
+  int iterations = 0;
+  double time_ms = 0.0;
+  std::vector<optimizer::IterationRecord> history;  ///< objective as F
+  Eigen::VectorXd q;
+  std::vector<std::pair<std::string, double>> joints_deg;  ///< every revolute joint's angle
+  /// Point-on-surface constraints: the contact's (u, v) on its surface.
+  std::vector<std::pair<std::string, Eigen::Vector2d>> contacts;
+  std::vector<Sensitivity> sensitivities;
+  std::vector<std::string> violated;  ///< rows above the tolerance (infeasible results)
+};
+
+class Study {
+ public:
+  /// @throws RunError when the problem cannot be built (e.g. a dexterity measure whose joints
+  /// do not parameterize the mechanism).
+  explicit Study(RunSpec run);
+  Study(const Study&) = delete;
+  Study& operator=(const Study&) = delete;
+
+  const RunSpec& run() const { return run_; }
+  const optimizer::Problem& problem() const { return problem_; }
+  int num_cases() const { return run_.num_cases(); }
+  /// Solves case `index` (thread safe: reads the shared problem, owns its data).
+  CaseResult Solve(int index) const;
+  /// The objective F at q and each term's measure.
+  double Objective(const Eigen::VectorXd& q,
+                   std::vector<std::pair<std::string, double>>* measures = nullptr) const;
+  /// The start angles of case `index` (listed, or drawn from the seeded generator).
+  std::map<int, double> StartAngles(int index) const;
+  /// The configuration case `index` starts from: the scene's joints assembled at its angles
+  /// (*ok false when they cannot be).
+  Eigen::VectorXd StartConfiguration(int index, bool* ok) const;
+  /// Seeds the tracked closest points of point-on-surface constraints in `data` at q (a solve
+  /// from q on that data then follows the nearest surface point).
+  void SeedContacts(const Eigen::VectorXd& q, optimizer::ProblemData* data) const;
+
+  nlohmann::json ToJson(const CaseResult& c) const;
+  /// The result file's header: run, scene, objective and variables.
+  nlohmann::json Header() const;
+
+ private:
+  struct RowName {
+    std::string constraint;
+    std::string kind;  ///< "joint", "constraint", "bound", "limit", "quaternion"
+    int first_row = 0, dim = 0;
+    int joint = -1;  ///< bounds and limits: the joint
+  };
+  Eigen::VectorXd Assemble(const std::map<int, double>& angles, bool* ok) const;
+  /// An unconverged, violated result: finds the least-violation point with the mechanism
+  /// intact and names the run's constraints it leaves unmet.
+  void ReportInfeasible(CaseResult* r) const;
+
+  RunSpec run_;
+  optimizer::Problem joints_only_;  ///< the scene's joints: the dexterity's mechanism
+  optimizer::Problem problem_;
+  std::vector<std::shared_ptr<optimizer::Dexterity>> dexterity_;  ///< per term (or null)
+  std::vector<optimizer::TermPtr> distance_terms_;                ///< per term (or null)
+  std::vector<RowName> equality_names_, inequality_names_;
+  double sign_ = -1.0;  ///< F = sign_ · E
+};
+
+}  // namespace tangent::design
