@@ -349,8 +349,11 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     ev_.ObjectiveGradient(q, q_prev_, M_, &grad_e_, design ? &gd_ : nullptr);
     if (design) {
       if (st.iterations == 0) {
+        // The objective's scale: its gradient at the start, or its value where the start is
+        // stationary.
         kkt_tolerance = options_.design.relative_kkt_tolerance *
-                        std::max(MaxAbs(grad_e_), options_.design.kkt_floor);
+                        std::max({MaxAbs(grad_e_), std::abs(ev_.Objective(q, q_prev_, M_)),
+                                  options_.design.kkt_floor});
       }
       if (grad_e_.allFinite()) UpdateDesignCurvature(q);
     }

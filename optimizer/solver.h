@@ -47,9 +47,9 @@ struct SolverOptions {
   ///    −Σ w ∇²f, built from their gradients along the steps taken (Powell's damping keeps B
   ///    positive definite; the first step is scaled so that |Δq| ≈ first_step), added to the
   ///    Newton matrix (dense);
-  ///  - convergence asks |KKT|∞ ≤ relative_kkt_tolerance · max(|∇E(q₀)|∞, kkt_floor): relative
-  ///    to the objective's own scale, so a small weight or a small objective is still solved to
-  ///    its digits (the absolute kkt_tolerance is not used);
+  ///  - convergence asks |KKT|∞ ≤ relative_kkt_tolerance · max(|∇E(q₀)|∞, |E(q₀)|, kkt_floor):
+  ///    relative to the objective's own scale, so a small weight or a small objective is still
+  ///    solved to its digits (the absolute kkt_tolerance is not used);
   ///  - a step is also halved while the Lagrangian E − λᵀc rises above its linear model's
   ///    Armijo line (the violation safeguard stays).
   /// Least astonishment is the Problem's: set it to 0 for a pure design solve.
