@@ -13,8 +13,6 @@
 #include <benchmark/benchmark.h>
 #include <nlopt.h>
 
-#include <IpIpoptApplication.hpp>
-#include <IpTNLP.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -25,6 +23,7 @@
 #include "optimizer/evaluator.h"
 #include "optimizer/solver.h"
 #include "testing/fourbar.h"
+#include "testing/ipopt_problem.h"
 
 namespace tangent::optimizer {
 namespace {
@@ -59,137 +58,12 @@ Setup& GetSetup() {
 
 // ---- IPOPT ----------------------------------------------------------------------------------
 
-class FourBarNlp : public Ipopt::TNLP {
- public:
-  explicit FourBarNlp(const Problem& p) : p_(p), ev_(p) {
-    n_ = p.mechanism().num_coordinates();
-    m_ = p.num_equality_rows();
-    H_.setZero(n_, n_);
-    w_.setZero(m_);
-  }
-  void Reset(const Eigen::VectorXd& q0) {
-    q0_ = q0;
-    p_.mechanism().Metric(q0_, &M_);
-  }
-  const Eigen::VectorXd& solution() const { return x_; }
-
-  bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac, Ipopt::Index& nnz_h,
-                    IndexStyleEnum& style) override {
-    n = n_;
-    m = m_;
-    nnz_jac = n_ * m_;
-    nnz_h = n_ * (n_ + 1) / 2;
-    style = C_STYLE;
-    return true;
-  }
-  bool get_bounds_info(Ipopt::Index n, Ipopt::Number* xl, Ipopt::Number* xu, Ipopt::Index m,
-                       Ipopt::Number* gl, Ipopt::Number* gu) override {
-    std::fill(xl, xl + n, -2e19);
-    std::fill(xu, xu + n, 2e19);
-    std::fill(gl, gl + m, 0.0);
-    std::fill(gu, gu + m, 0.0);
-    return true;
-  }
-  bool get_starting_point(Ipopt::Index n, bool, Ipopt::Number* x, bool, Ipopt::Number*,
-                          Ipopt::Number*, Ipopt::Index, bool, Ipopt::Number*) override {
-    std::copy(q0_.data(), q0_.data() + n, x);
-    return true;
-  }
-  bool eval_f(Ipopt::Index n, const Ipopt::Number* x, bool, Ipopt::Number& f) override {
-    Load(n, x);
-    f = ev_.Objective(q_, q0_, M_);
-    return true;
-  }
-  bool eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool, Ipopt::Number* g) override {
-    Load(n, x);
-    Eigen::VectorXd grad(n_);
-    ev_.ObjectiveGradient(q_, q0_, M_, &grad);
-    std::copy(grad.data(), grad.data() + n, g);
-    return true;
-  }
-  bool eval_g(Ipopt::Index n, const Ipopt::Number* x, bool, Ipopt::Index m,
-              Ipopt::Number* g) override {
-    Load(n, x);
-    std::copy(ev_.c_e().data(), ev_.c_e().data() + m, g);
-    return true;
-  }
-  bool eval_jac_g(Ipopt::Index n, const Ipopt::Number* x, bool, Ipopt::Index m, Ipopt::Index,
-                  Ipopt::Index* rows, Ipopt::Index* cols, Ipopt::Number* values) override {
-    if (values == nullptr) {
-      for (int i = 0, k = 0; i < m; ++i)
-        for (int j = 0; j < n; ++j, ++k) rows[k] = i, cols[k] = j;
-      return true;
-    }
-    Load(n, x);
-    for (int i = 0, k = 0; i < m; ++i)
-      for (int j = 0; j < n; ++j, ++k) values[k] = ev_.J_e()(i, j);
-    return true;
-  }
-  bool eval_h(Ipopt::Index n, const Ipopt::Number* x, bool, Ipopt::Number sigma, Ipopt::Index m,
-              const Ipopt::Number* lambda, bool, Ipopt::Index, Ipopt::Index* rows,
-              Ipopt::Index* cols, Ipopt::Number* values) override {
-    if (values == nullptr) {
-      for (int i = 0, k = 0; i < n; ++i)
-        for (int j = 0; j <= i; ++j, ++k) rows[k] = i, cols[k] = j;
-      return true;
-    }
-    Load(n, x);
-    // σ ∇²E + Σ λ_i ∇²c_i (IPOPT's Lagrangian is σ f + λᵀg).
-    H_ = sigma * p_.least_astonishment() * M_;
-    Eigen::VectorXd wo(p_.num_objective_rows());
-    for (const Problem::Entry& o : p_.objectives()) {
-      const auto J = ev_.J_o().middleRows(o.row, o.term->dim());
-      H_.noalias() += sigma * o.weight * (J.transpose() * J);
-      wo.segment(o.row, o.term->dim()) = sigma * o.weight * ev_.r_o().segment(o.row, o.term->dim());
-    }
-    ev_.AddCurvature(p_.objectives(), wo, &H_);
-    for (int i = 0; i < m; ++i) w_[i] = lambda[i];
-    ev_.AddCurvature(p_.equalities(), w_, &H_);
-    for (int i = 0, k = 0; i < n; ++i)
-      for (int j = 0; j <= i; ++j, ++k) values[k] = H_(i, j);
-    return true;
-  }
-  void finalize_solution(Ipopt::SolverReturn, Ipopt::Index n, const Ipopt::Number* x,
-                         const Ipopt::Number*, const Ipopt::Number*, Ipopt::Index,
-                         const Ipopt::Number*, const Ipopt::Number*, Ipopt::Number,
-                         const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) override {
-    x_ = Eigen::Map<const Eigen::VectorXd>(x, n);
-  }
-
- private:
-  void Load(int n, const Ipopt::Number* x) {
-    q_ = Eigen::Map<const Eigen::VectorXd>(x, n);
-    ev_.Evaluate(q_);
-  }
-  const Problem& p_;
-  ProblemEvaluator ev_;
-
- public:
-  ProblemData& data() { return ev_.data(); }
-
- private:
-  int n_ = 0, m_ = 0;
-  Eigen::VectorXd q0_, q_, x_, w_;
-  Eigen::MatrixXd M_, H_;
-};
-
+// The shared adapter (testing/ipopt_problem.h): exact Lagrangian Hessian from the terms.
 struct IpoptPeer {
-  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
-  Ipopt::SmartPtr<FourBarNlp> nlp;
-  explicit IpoptPeer(const Problem& p) : nlp(new FourBarNlp(p)) {
-    app->Options()->SetIntegerValue("print_level", 0);
-    app->Options()->SetStringValue("sb", "yes");
-    app->Options()->SetNumericValue("tol", 1e-10);
-    app->Options()->SetNumericValue("constr_viol_tol", 1e-10);
-    app->Options()->SetStringValue("hessian_approximation", "exact");
-    app->Initialize();
-  }
-  ProblemData& data() { return nlp->data(); }
-  Eigen::VectorXd Solve(const Eigen::VectorXd& q0) {
-    nlp->Reset(q0);
-    app->OptimizeTNLP(nlp);
-    return nlp->solution();
-  }
+  testing::IpoptSolver solver;
+  explicit IpoptPeer(const Problem& p) : solver(p) {}
+  ProblemData& data() { return solver.data(); }
+  Eigen::VectorXd Solve(const Eigen::VectorXd& q0) { return solver.Solve(q0).q; }
 };
 
 // ---- NLopt SLSQP ----------------------------------------------------------------------------

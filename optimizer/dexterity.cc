@@ -18,9 +18,19 @@ Dexterity::Dexterity(const Problem& problem, const Attachment& end_effector,
   a_row_ = aux_.num_equality_rows();
   // θ through RevoluteLimits' first row θ − lo (its Jacobian and Hessian are θ's).
   for (const auto& [a, b] : joints) aux_.AddEquality(RevoluteLimits(a, b, -4.0, 4.0));
+  const Mechanism& mech = problem.mechanism();
+  body_of_coordinate_.assign(static_cast<size_t>(mech.num_coordinates()), -1);
+  for (int i = 0; i < mech.num_bodies(); ++i) {
+    if (mech.offset(i) < 0) continue;
+    for (int c = 0; c < 7; ++c) body_of_coordinate_[static_cast<size_t>(mech.offset(i) + c)] = i;
+  }
 }
 
 Dexterity::Measures Dexterity::Evaluate(const Eigen::VectorXd& q, bool gradients) const {
+  return Evaluate(q, gradients ? kAllGradients : 0);
+}
+
+Dexterity::Measures Dexterity::Evaluate(const Eigen::VectorXd& q, int gradients) const {
   const int n = problem_.mechanism().num_coordinates();
   const int mc = problem_.num_equality_rows();
   if (mc + m_ != n) {
@@ -74,19 +84,39 @@ Dexterity::Measures Dexterity::Evaluate(const Eigen::VectorXd& q, bool gradients
     Eigen::VectorXd w_main(mc), w_aux = Eigen::VectorXd::Zero(aux_.num_equality_rows());
     Eigen::MatrixXd H(n, n);
     for (int j = 0; j < n; ++j) {
+      // Only the terms on coordinate j's body have second derivatives in row j: the others get
+      // zero weight and are skipped (a third of the Hessian evaluations on a three-link chain).
+      const int body = body_of_coordinate_[static_cast<size_t>(j)];
       H.setZero();
       w_main = Y2.col(j).head(mc);
+      for (const Problem::Entry& e : problem_.equalities()) {
+        if (e.term->body_a() != body && e.term->body_b() != body) {
+          w_main.segment(e.row, e.term->dim()).setZero();
+        }
+      }
       main.AddCurvature(problem_.equalities(), w_main, &H);
-      w_aux.segment<3>(x_row_) = Y1.col(j);
-      for (int k = 0; k < m_; ++k) w_aux[a_row_ + 2 * k] = Y2(mc + k, j);
+      w_aux.setZero();
+      for (const Problem::Entry& e : aux_.equalities()) {
+        if (e.term->body_a() != body && e.term->body_b() != body) continue;
+        if (e.row == x_row_) w_aux.segment<3>(x_row_) = Y1.col(j);
+        for (int k = 0; k < m_; ++k) {
+          if (e.row == a_row_ + 2 * k) w_aux[a_row_ + 2 * k] = Y2(mc + k, j);
+        }
+      }
       aux.AddCurvature(aux_.equalities(), w_aux, &H);
       grad += H.col(j);
     }
     return grad;
   };
-  out.grad_dexterity = gradient(G_dex);
-  out.grad_inverse_condition = gradient(G_inv);
-  out.grad_force_transmission = gradient(G_force);
+  if (gradients & GradientBit(DexterityMeasure::kDexterity)) {
+    out.grad_dexterity = gradient(G_dex);
+  }
+  if (gradients & GradientBit(DexterityMeasure::kInverseCondition)) {
+    out.grad_inverse_condition = gradient(G_inv);
+  }
+  if (gradients & GradientBit(DexterityMeasure::kForceTransmission)) {
+    out.grad_force_transmission = gradient(G_force);
+  }
   return out;
 }
 
@@ -112,7 +142,7 @@ class DexterityObjective final : public DesignObjective {
     return Pick(r.dexterity, r.inverse_condition, r.force_transmission);
   }
   void Gradient(const Eigen::VectorXd& q, Eigen::VectorXd* g) const override {
-    const Dexterity::Measures r = d_->Evaluate(q, true);
+    const Dexterity::Measures r = d_->Evaluate(q, Dexterity::GradientBit(m_));
     *g = m_ == DexterityMeasure::kDexterity          ? r.grad_dexterity
          : m_ == DexterityMeasure::kInverseCondition ? r.grad_inverse_condition
                                                      : r.grad_force_transmission;

@@ -12,6 +12,8 @@
 
 namespace tangent::optimizer {
 
+enum class DexterityMeasure { kDexterity, kInverseCondition, kForceTransmission };
+
 /// Kinematic performance of an end-effector point with respect to chosen revolute joints, for
 /// serial chains and closed loops alike (seed 001 Eq. 1, §6).
 ///
@@ -47,14 +49,18 @@ class Dexterity {
   /// The measures at q (gradients when asked). @throws std::runtime_error when B is singular
   /// (the chosen joints do not parameterize the mechanism's motion there).
   Measures Evaluate(const Eigen::VectorXd& q, bool gradients) const;
+  /// The measures with only the gradients whose GradientBit is set in `gradients` (each costs n
+  /// weighted Hessian evaluations; the others are left empty).
+  Measures Evaluate(const Eigen::VectorXd& q, int gradients) const;
+  static constexpr int GradientBit(DexterityMeasure m) { return 1 << static_cast<int>(m); }
+  static constexpr int kAllGradients = 7;
 
  private:
   const Problem& problem_;
   Problem aux_;  ///< unit quaternions, then X (3 rows), then one angle row per chosen joint
   int x_row_ = 0, a_row_ = 0, m_ = 0;
+  std::vector<int> body_of_coordinate_;  ///< the moving body of each coordinate
 };
-
-enum class DexterityMeasure { kDexterity, kInverseCondition, kForceTransmission };
 
 std::shared_ptr<DesignObjective> MakeDexterityObjective(std::shared_ptr<const Dexterity> d,
                                                         DexterityMeasure measure);
