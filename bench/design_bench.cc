@@ -63,11 +63,11 @@ Row Compare(const std::string& path, int reps) {
     for (int r = 0; r < reps; ++r) {
       const auto t0 = Clock::now();
       tangent::optimizer::Solver solver(study.problem(), o);
-      study.SeedContacts(q0, &solver.data());
+      study.PrepareData(i, q0, &solver.data());
       q = q0;
       st = solver.Solve(&q);
       const auto t1 = Clock::now();
-      study.SeedContacts(q0, &ipopt.data());
+      study.PrepareData(i, q0, &ipopt.data());
       ref = ipopt.Solve(q0);
       const auto t2 = Clock::now();
       a.push_back(Ms(t0, t1));

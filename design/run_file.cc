@@ -160,8 +160,9 @@ void ParseConstraints(const Node& n, double unit, RunSpec* run) {
           cs.rhs[k] = unit * rhs.At(static_cast<size_t>(k)).Number();
         }
       }
-      cs.term = optimizer::Shifted(cs.inner, cs.rhs);
     }
+    // Always through Shifted: its rhs is per-solve data, so a sweep moves it case by case.
+    cs.term = optimizer::Shifted(cs.inner, cs.rhs);
     run->constraints.push_back(std::move(cs));
   }
 }
@@ -185,6 +186,49 @@ void ParseBounds(const Node& n, RunSpec* run) {
     }
     run->bounds.push_back(bs);
   }
+}
+
+void ParseGrid(const Node& n, double unit, RunSpec* run) {
+  for (size_t i = 0; i < n.Size(); ++i) {
+    const Node g = n.At(i);
+    g.OnlyKeys({"constraint", "row", "values", "range"});
+    GridAxis axis;
+    const std::string name = g.At("constraint").String();
+    axis.constraint = -1;
+    for (size_t k = 0; k < run->constraints.size(); ++k) {
+      if (run->constraints[k].name == name) axis.constraint = static_cast<int>(k);
+    }
+    if (axis.constraint < 0) g.At("constraint").Fail("no constraint named \"" + name + "\"");
+    const ConstraintSpec& c = run->constraints[static_cast<size_t>(axis.constraint)];
+    axis.row = g.Integer("row", 0, 0, c.term->dim() - 1);
+    for (const GridAxis& other : run->grid) {
+      if (other.constraint == axis.constraint && other.row == axis.row) {
+        g.Fail("this constraint row is already an axis");
+      }
+    }
+    if (g.Has("values") == g.Has("range")) g.Fail("give either \"values\" or \"range\"");
+    if (g.Has("values")) {
+      const Node v = g.At("values");
+      for (size_t k = 0; k < v.Size(); ++k) {
+        axis.values.push_back(unit * v.At(k).Number());
+      }
+    } else {
+      const Node r = g.At("range");
+      if (r.Size() != 3) r.Fail("must be [first, last, count]");
+      const double lo = unit * r.At(0).Number(), hi = unit * r.At(1).Number();
+      const Node count = r.At(2);
+      if (!count.j.is_number_integer() || count.j.get<long long>() < 2 ||
+          count.j.get<long long>() > 10000) {
+        count.Fail("the count must be an integer in [2, 10000]");
+      }
+      const int m = static_cast<int>(count.j.get<long long>());
+      if (!(lo < hi)) r.Fail("empty or inverted range: first must be below last");
+      for (int k = 0; k < m; ++k) axis.values.push_back(lo + (hi - lo) * k / (m - 1));
+    }
+    if (axis.values.empty()) g.Fail("no values");
+    run->grid.push_back(std::move(axis));
+  }
+  if (run->num_grid_points() > 1000000) n.Fail("more than 10^6 grid points");
 }
 
 void ParseStarts(const Node& n, RunSpec* run) {
@@ -221,7 +265,7 @@ void ParseStarts(const Node& n, RunSpec* run) {
       if (s.joints[j].type == "revolute") run->random_joints.push_back(static_cast<int>(j));
     }
   }
-  if (run->num_cases() == 0) n.Fail("no start: give \"list\" or \"random\" > 0");
+  if (run->num_starts() == 0) n.Fail("no start: give \"list\" or \"random\" > 0");
 }
 
 }  // namespace
@@ -234,8 +278,8 @@ RunSpec ParseRun(const std::string& text, const std::string& where, const std::s
     throw RunError(where + ": not valid JSON: " + e.what());
   }
   const Node root{j, where, "", Node::Style::kPointer};
-  root.OnlyKeys({"comment", "scene", "length_unit", "objective", "constraints", "bounds", "starts",
-                 "solver"});
+  root.OnlyKeys({"comment", "scene", "length_unit", "objective", "constraints", "bounds", "grid",
+                 "starts", "solver"});
   RunSpec run;
   run.path = where;
   const std::string scene = root.At("scene").String();
@@ -255,6 +299,7 @@ RunSpec ParseRun(const std::string& text, const std::string& where, const std::s
   ParseObjective(root.At("objective"), unit, &run);
   if (root.Has("constraints")) ParseConstraints(root.At("constraints"), unit, &run);
   if (root.Has("bounds")) ParseBounds(root.At("bounds"), &run);
+  if (root.Has("grid")) ParseGrid(root.At("grid"), unit, &run);
   ParseStarts(root.At("starts"), &run);
   if (root.Has("solver")) {
     const Node sv = root.At("solver");

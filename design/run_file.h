@@ -60,6 +60,14 @@ struct StartSpec {
   std::map<int, double> angles;
 };
 
+/// A sweep axis: the values one row of a constraint's right-hand side takes (in metres or
+/// radians as the constraint's rows are); the cases are the grid's points times the starts.
+struct GridAxis {
+  int constraint = 0;  ///< index into RunSpec::constraints
+  int row = 0;
+  std::vector<double> values;
+};
+
 struct RunSpec {
   std::string path;  ///< the run file
   std::string scene_path;
@@ -74,12 +82,20 @@ struct RunSpec {
   int random_starts = 0;
   uint64_t seed = 1;
   std::vector<int> random_joints;
+  std::vector<GridAxis> grid;  ///< empty: one point (the constraints' own rhs)
   int max_iterations = 500;
   double relative_kkt_tolerance = 1e-9;
   double constraint_tolerance = 1e-12;
 
   /// The starts in order: the listed ones, then the random ones.
-  int num_cases() const { return static_cast<int>(starts.size()) + random_starts; }
+  int num_starts() const { return static_cast<int>(starts.size()) + random_starts; }
+  int num_grid_points() const {
+    int n = 1;
+    for (const GridAxis& a : grid) n *= static_cast<int>(a.values.size());
+    return n;
+  }
+  /// Case k is start k % num_starts() at grid point k / num_starts() (the first axis slowest).
+  int num_cases() const { return num_starts() * num_grid_points(); }
 };
 
 /// Parses a run file's text; `where` names it in errors, `base_dir` resolves the scene path.

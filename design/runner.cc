@@ -90,7 +90,12 @@ nlohmann::json ResultFile(const Study& study, const std::map<int, nlohmann::json
   }
   out["optima"] = optima;
   out["best_case"] = best >= 0 ? nlohmann::json(best) : nlohmann::json(nullptr);
-  if (best >= 0) out["best_objective"] = best_value;
+  if (best >= 0) {
+    out["best_objective"] = best_value;
+    const std::vector<double> q = cases.at(best)["q"].get<std::vector<double>>();
+    out["best_geometry"] = study.Geometry(
+        Eigen::Map<const Eigen::VectorXd>(q.data(), static_cast<Eigen::Index>(q.size())));
+  }
   out["results"] = list;
   return out;
 }

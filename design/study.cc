@@ -162,11 +162,13 @@ double Study::Objective(const Eigen::VectorXd& q,
 }
 
 std::map<int, double> Study::StartAngles(int index) const {
-  if (index < static_cast<int>(run_.starts.size())) {
-    return run_.starts[static_cast<size_t>(index)].angles;
+  const int start = index % run_.num_starts();
+  if (start < static_cast<int>(run_.starts.size())) {
+    return run_.starts[static_cast<size_t>(start)].angles;
   }
-  // Seeded by (seed, case index) alone: the same angles on any thread or rank.
-  const uint64_t k = static_cast<uint64_t>(index);
+  // Seeded by (seed, start index) alone: the same angles on any thread or rank, and at every
+  // grid point.
+  const uint64_t k = static_cast<uint64_t>(start);
   std::seed_seq seq{static_cast<uint32_t>(run_.seed), static_cast<uint32_t>(run_.seed >> 32),
                     static_cast<uint32_t>(k), static_cast<uint32_t>(k >> 32)};
   std::mt19937_64 gen(seq);
@@ -183,7 +185,8 @@ std::map<int, double> Study::StartAngles(int index) const {
   return angles;
 }
 
-Eigen::VectorXd Study::Assemble(const std::map<int, double>& angles, bool* ok) const {
+Eigen::VectorXd Study::Assemble(int index, const std::map<int, double>& angles, bool* ok,
+                                bool* feasible) const {
   // The joints at the start angles: minimize Σ (θ_j − target_j)² subject to the scene's joints,
   // from the scene's initial pose (repeated warm solves: each is anchored at its start). Then,
   // from there, the same with the run's constraints and bounds too, so that the design solve
@@ -220,9 +223,11 @@ Eigen::VectorXd Study::Assemble(const std::map<int, double>& angles, bool* ok) c
     o.max_iterations = 200;
     o.kkt_tolerance = 1e-12;
     optimizer::Solver solver(p, o);
-    if (constrained) SeedContacts(*q, &solver.data());
+    if (constrained) PrepareData(index, *q, &solver.data());
     optimizer::SolveStats st;
-    for (int round = 0; round < 20; ++round) {
+    // (Fewer rounds with the run's constraints: a set that cannot be met is diagnosed by
+    // ReportInfeasible, not by trying longer.)
+    for (int round = 0; round < (constrained ? 4 : 20); ++round) {
       st = solver.Solve(q);
       if (st.converged && st.iterations <= 1) break;
     }
@@ -230,30 +235,65 @@ Eigen::VectorXd Study::Assemble(const std::map<int, double>& angles, bool* ok) c
   };
   Eigen::VectorXd q = s.mechanism.InitialCoordinates();
   *ok = solve(false, &q);
+  if (feasible) *feasible = false;
   if (!*ok) return q;
   Eigen::VectorXd constrained = q;
-  if (solve(true, &constrained)) q = constrained;
+  if (solve(true, &constrained)) {
+    q = constrained;
+    if (feasible) *feasible = true;
+  }
   return q;
 }
 
-void Study::SeedContacts(const Eigen::VectorXd& q, optimizer::ProblemData* data) const {
+std::vector<std::pair<std::string, double>> Study::GridPoint(int index) const {
+  std::vector<std::pair<std::string, double>> point;
+  int g = index / run_.num_starts();
+  std::vector<int> at(run_.grid.size());
+  for (size_t a = run_.grid.size(); a-- > 0;) {  // the last axis fastest
+    const int m = static_cast<int>(run_.grid[a].values.size());
+    at[a] = g % m;
+    g /= m;
+  }
+  for (size_t a = 0; a < run_.grid.size(); ++a) {
+    const GridAxis& axis = run_.grid[a];
+    point.emplace_back(run_.constraints[static_cast<size_t>(axis.constraint)].name + " row " +
+                           std::to_string(axis.row),
+                       axis.values[static_cast<size_t>(at[a])]);
+  }
+  return point;
+}
+
+void Study::PrepareData(int index, const Eigen::VectorXd& q, optimizer::ProblemData* data) const {
+  // The case's right-hand sides: the run file's, with the grid point's rows.
+  std::vector<Eigen::VectorXd> rhs;
+  for (const ConstraintSpec& c : run_.constraints) rhs.push_back(c.rhs);
+  if (index >= 0) {
+    const auto point = GridPoint(index);
+    for (size_t a = 0; a < run_.grid.size(); ++a) {
+      rhs[static_cast<size_t>(run_.grid[a].constraint)][run_.grid[a].row] = point[a].second;
+    }
+  }
   // Point-on-surface constraints track the closest point: seed each at this configuration's.
   const server::Scene& s = *run_.scene;
   std::vector<contact::BodyPose> poses;
   s.mechanism.Poses(q, &poses);
-  for (const ConstraintSpec& c : run_.constraints) {
+  for (size_t k = 0; k < run_.constraints.size(); ++k) {
+    const ConstraintSpec& c = run_.constraints[k];
+    if (!data->HasState(*c.term)) continue;
+    auto& st = data->StateAs<optimizer::ShiftedState>(*c.term);
+    st.rhs = rhs[k];
     if (c.surface < 0) continue;
     const auto& term = dynamic_cast<const optimizer::PointOnSurfaceTerm&>(*c.inner);
     const server::SceneSurface& ss = s.surfaces[static_cast<size_t>(c.surface)];
-    auto& st = data->StateAs<optimizer::PointOnSurfaceTerm::State>(*c.term);
-    st.u = NearestSample(ss.surface, poses[static_cast<size_t>(ss.body)],
-                         poses[static_cast<size_t>(term.body_a())].Point(term.point().point));
-    st.valid = false;
+    auto& inner = dynamic_cast<optimizer::PointOnSurfaceTerm::State&>(*st.inner);
+    inner.u = NearestSample(ss.surface, poses[static_cast<size_t>(ss.body)],
+                            poses[static_cast<size_t>(term.body_a())].Point(term.point().point));
+    inner.valid = false;
   }
 }
 
 Eigen::VectorXd Study::StartConfiguration(int index, bool* ok) const {
-  return Assemble(StartAngles(index), ok);
+  return Assemble(index, StartAngles(index), ok, nullptr);
 }
 
 CaseResult Study::Solve(int index) const {
@@ -267,10 +307,18 @@ CaseResult Study::Solve(int index) const {
   }
   const auto t0 = Clock::now();
   bool assembled = false;
-  Eigen::VectorXd q = Assemble(angles, &assembled);
+  r.grid = GridPoint(index);
+  bool feasible = false;
+  Eigen::VectorXd q = Assemble(index, angles, &assembled, &feasible);
+  r.q = q;
   if (!assembled) {
     r.status = "start failed: the scene's joints could not be assembled at these angles";
-    r.q = q;
+    return r;
+  }
+  // The run's constraints could not be met from this start: when the least-violation point
+  // confirms it, that is the result (a grid's unreachable points cost one such solve each).
+  if (!feasible && ReportInfeasible(index, &r)) {
+    r.time_ms = 1e3 * std::chrono::duration<double>(Clock::now() - t0).count();
     return r;
   }
   optimizer::SolverOptions o;
@@ -279,7 +327,7 @@ CaseResult Study::Solve(int index) const {
   o.max_iterations = run_.max_iterations;
   o.constraint_tolerance = run_.constraint_tolerance;
   optimizer::Solver solver(problem_, o);
-  SeedContacts(q, &solver.data());
+  PrepareData(index, q, &solver.data());
   std::vector<contact::BodyPose> poses;
   solver.set_history(&r.history);
   const optimizer::SolveStats st = solver.Solve(&q);
@@ -299,8 +347,9 @@ CaseResult Study::Solve(int index) const {
   }
   for (const ConstraintSpec& c : run_.constraints) {
     if (c.surface < 0) continue;
-    r.contacts.emplace_back(c.name,
-                            solver.data().StateAs<optimizer::PointOnSurfaceTerm::State>(*c.term).u);
+    const auto& shifted = solver.data().StateAs<optimizer::ShiftedState>(*c.term);
+    r.contacts.emplace_back(
+        c.name, dynamic_cast<const optimizer::PointOnSurfaceTerm::State&>(*shifted.inner).u);
   }
   // Sensitivities: ∇E = Jᵀλ, so dE*/db = λ for r(q) = b (or ≥ b), and F = sign_ · E.
   const Eigen::VectorXd& le = solver.equality_multipliers();
@@ -350,14 +399,14 @@ CaseResult Study::Solve(int index) const {
   if (st.converged) {
     r.status = "optimum";
   } else if (!r.violated.empty()) {
-    ReportInfeasible(&r);
+    if (!ReportInfeasible(index, &r)) r.status = "infeasible";
   } else {
     r.status = "not converged";
   }
   return r;
 }
 
-void Study::ReportInfeasible(CaseResult* r) const {
+bool Study::ReportInfeasible(int index, CaseResult* r) const {
   // The least-violation point with the mechanism intact: the scene's joints, limits and the
   // run's bounds and inequalities hard, the run's equalities as least squares ½ Σ |r − rhs|².
   // Those left unmet there are what cannot be had together with the mechanism.
@@ -386,18 +435,17 @@ void Study::ReportInfeasible(CaseResult* r) const {
   o.max_iterations = 200;
   o.kkt_tolerance = 1e-12;
   optimizer::Solver solver(p, o);
-  SeedContacts(r->q, &solver.data());
+  PrepareData(index, r->q, &solver.data());
   Eigen::VectorXd q = r->q;
   bool assembled = false;
-  const Eigen::VectorXd start = Assemble({}, &assembled);
+  const Eigen::VectorXd start = Assemble(index, {}, &assembled, nullptr);
   if (assembled) q = start;  // (from the scene's pose: the diverged iterate may be far off)
   optimizer::SolveStats st;
   for (int round = 0; round < 20; ++round) {
     st = solver.Solve(&q);
     if (st.converged && st.iterations <= 1) break;
   }
-  r->status = "infeasible";
-  if (!(st.max_violation <= 1e-9)) return;  // the hard set itself conflicts: rows as found
+  if (!(st.max_violation <= 1e-9)) return false;  // the hard set itself conflicts
   optimizer::ProblemEvaluator ev(p, false);
   ev.Evaluate(q);
   std::vector<std::string> unmet;
@@ -411,13 +459,15 @@ void Study::ReportInfeasible(CaseResult* r) const {
       worst = std::max(worst, off);
     }
   }
-  if (unmet.empty()) return;
+  if (unmet.empty()) return false;
+  r->status = "infeasible";
   r->violated = unmet;
   r->q = q;
   r->violation = worst;
   r->measures.clear();
   r->objective = Objective(q, &r->measures);
   r->converged = false;
+  return true;
 }
 
 nlohmann::json Study::ToJson(const CaseResult& c) const {
@@ -427,6 +477,10 @@ nlohmann::json Study::ToJson(const CaseResult& c) const {
   nlohmann::json start = nlohmann::json::object();
   for (const auto& [name, deg] : c.start_deg) start[name] = deg;
   j["start_deg"] = start;
+  j["start"] = c.index % run_.num_starts();
+  nlohmann::json grid = nlohmann::json::object();
+  for (const auto& [name, value] : c.grid) grid[name] = value;
+  j["grid"] = grid;
   j["converged"] = c.converged;
   j["objective"] = c.objective;
   nlohmann::json measures = nlohmann::json::array();
@@ -462,6 +516,79 @@ nlohmann::json Study::ToJson(const CaseResult& c) const {
   return j;
 }
 
+nlohmann::json Study::Geometry(const Eigen::VectorXd& q) const {
+  // What a plot of the mechanism needs, in the world frame (m): each body as the points its
+  // joints and end effectors attach at, each scene surface sampled on a 25 x 25 grid, and each
+  // dexterity term's end effector with its Jacobian J (3 x m).
+  const server::Scene& s = *run_.scene;
+  std::vector<contact::BodyPose> poses;
+  s.mechanism.Poses(q, &poses);
+  std::vector<std::vector<Eigen::Vector3d>> points(static_cast<size_t>(s.mechanism.num_bodies()));
+  auto add = [&](const optimizer::Attachment& a) {
+    points[static_cast<size_t>(a.body)].push_back(
+        poses[static_cast<size_t>(a.body)].Point(a.point));
+  };
+  for (const server::JointSpec& js : s.joints) {
+    add(js.a);
+    add(js.b);
+  }
+  for (const MeasureSpec& m : run_.terms) add(m.end_effector);
+  nlohmann::json bodies = nlohmann::json::array();
+  for (int b = 0; b < s.mechanism.num_bodies(); ++b) {
+    nlohmann::json pts = nlohmann::json::array();
+    for (const Eigen::Vector3d& x : points[static_cast<size_t>(b)])
+      pts.push_back({x[0], x[1], x[2]});
+    bodies.push_back({{"name", s.mechanism.body(b).name},
+                      {"fixed", s.mechanism.body(b).fixed},
+                      {"points", pts}});
+  }
+  nlohmann::json surfaces = nlohmann::json::array();
+  for (const server::SceneSurface& ss : s.surfaces) {
+    const nurbs::NurbsSurface& f = ss.surface;
+    constexpr int kN = 25;
+    nlohmann::json x = nlohmann::json::array(), y = x, z = x;
+    for (int i = 0; i < kN; ++i) {
+      nlohmann::json rx = nlohmann::json::array(), ry = rx, rz = rx;
+      for (int j = 0; j < kN; ++j) {
+        const double u = f.knots_u().domain_begin() +
+                         (f.knots_u().domain_end() - f.knots_u().domain_begin()) * i / (kN - 1);
+        const double v = f.knots_v().domain_begin() +
+                         (f.knots_v().domain_end() - f.knots_v().domain_begin()) * j / (kN - 1);
+        const Eigen::Vector3d p = poses[static_cast<size_t>(ss.body)].Point(f.Evaluate(u, v, 0).S);
+        rx.push_back(p[0]);
+        ry.push_back(p[1]);
+        rz.push_back(p[2]);
+      }
+      x.push_back(rx);
+      y.push_back(ry);
+      z.push_back(rz);
+    }
+    surfaces.push_back({{"name", ss.name}, {"x", x}, {"y", y}, {"z", z}});
+  }
+  nlohmann::json effectors = nlohmann::json::array();
+  for (size_t k = 0; k < run_.terms.size(); ++k) {
+    const MeasureSpec& m = run_.terms[k];
+    const Eigen::Vector3d p =
+        poses[static_cast<size_t>(m.end_effector.body)].Point(m.end_effector.point);
+    nlohmann::json e = {{"measure", m.measure}, {"point", {p[0], p[1], p[2]}}};
+    if (dexterity_[k]) {
+      try {
+        const Eigen::MatrixXd J = dexterity_[k]->Evaluate(q, false).J;
+        nlohmann::json rows = nlohmann::json::array();
+        for (int r = 0; r < 3; ++r) {
+          rows.push_back(std::vector<double>(J.cols()));
+          for (int c = 0; c < J.cols(); ++c)
+            rows[static_cast<size_t>(r)][static_cast<size_t>(c)] = J(r, c);
+        }
+        e["jacobian"] = rows;
+      } catch (const std::runtime_error&) {  // (singular here: no ellipsoid)
+      }
+    }
+    effectors.push_back(e);
+  }
+  return {{"bodies", bodies}, {"surfaces", surfaces}, {"end_effectors", effectors}};
+}
+
 nlohmann::json Study::Header() const {
   const server::Scene& s = *run_.scene;
   nlohmann::json j;
@@ -483,6 +610,14 @@ nlohmann::json Study::Header() const {
   j["variables"] = "configuration: " + std::to_string(s.mechanism.num_moving()) +
                    " moving bodies x 7 maximal coordinates";
   j["cases"] = num_cases();
+  j["starts"] = run_.num_starts();
+  nlohmann::json grid = nlohmann::json::array();
+  for (const GridAxis& a : run_.grid) {
+    grid.push_back({{"name", run_.constraints[static_cast<size_t>(a.constraint)].name + " row " +
+                                 std::to_string(a.row)},
+                    {"values", a.values}});
+  }
+  j["grid"] = grid;
   j["seed"] = run_.seed;
   return j;
 }

@@ -31,6 +31,7 @@ struct Sensitivity {
 struct CaseResult {
   int index = 0;
   std::vector<std::pair<std::string, double>> start_deg;  ///< the start's joint angles
+  std::vector<std::pair<std::string, double>> grid;       ///< the grid point's rhs rows
   std::string status;  ///< "optimum", "not converged", "infeasible", "start failed: ..."
   bool converged = false;
   double objective = 0.0;                                ///< F at the result
@@ -68,13 +69,20 @@ class Study {
   /// The configuration case `index` starts from: the scene's joints assembled at its angles
   /// (*ok false when they cannot be).
   Eigen::VectorXd StartConfiguration(int index, bool* ok) const;
-  /// Seeds the tracked closest points of point-on-surface constraints in `data` at q (a solve
-  /// from q on that data then follows the nearest surface point).
-  void SeedContacts(const Eigen::VectorXd& q, optimizer::ProblemData* data) const;
+  /// Makes `data` (of the study's problem, or of any problem holding its constraint terms) ready
+  /// for case `index` from q: the constraints' right-hand sides at the case's grid point (index
+  /// < 0: the run file's), and the tracked closest points of point-on-surface constraints seeded
+  /// at q.
+  void PrepareData(int index, const Eigen::VectorXd& q, optimizer::ProblemData* data) const;
+  /// The grid point of case `index`: each axis's name and value.
+  std::vector<std::pair<std::string, double>> GridPoint(int index) const;
 
   nlohmann::json ToJson(const CaseResult& c) const;
   /// The result file's header: run, scene, objective and variables.
   nlohmann::json Header() const;
+  /// The mechanism at q for plots: bodies as attachment points, surfaces sampled, end effectors
+  /// with their Jacobians (world frame, m).
+  nlohmann::json Geometry(const Eigen::VectorXd& q) const;
 
  private:
   struct RowName {
@@ -83,10 +91,14 @@ class Study {
     int first_row = 0, dim = 0;
     int joint = -1;  ///< bounds and limits: the joint
   };
-  Eigen::VectorXd Assemble(const std::map<int, double>& angles, bool* ok) const;
-  /// An unconverged, violated result: finds the least-violation point with the mechanism
-  /// intact and names the run's constraints it leaves unmet.
-  void ReportInfeasible(CaseResult* r) const;
+  /// The start of case `index`: the scene's joints at `angles` (*ok), then the run's
+  /// constraints and bounds met too where they can be (*feasible, may be null).
+  Eigen::VectorXd Assemble(int index, const std::map<int, double>& angles, bool* ok,
+                           bool* feasible) const;
+  /// Finds the least-violation point with the mechanism intact; when the run's equality
+  /// constraints are unmet there, makes *r that infeasible result (naming them) and returns
+  /// true.
+  bool ReportInfeasible(int index, CaseResult* r) const;
 
   RunSpec run_;
   optimizer::Problem joints_only_;  ///< the scene's joints: the dexterity's mechanism

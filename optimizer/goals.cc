@@ -301,17 +301,23 @@ class ShiftedTerm final : public Term {
   int dim() const override { return term_->dim(); }
   int body_a() const override { return term_->body_a(); }
   int body_b() const override { return term_->body_b(); }
-  std::unique_ptr<TermState> MakeState() const override { return term_->MakeState(); }
+  std::unique_ptr<TermState> MakeState() const override {
+    auto st = std::make_unique<ShiftedState>();
+    st->inner = term_->MakeState();
+    st->rhs = rhs_;
+    return st;
+  }
   void Evaluate(const std::vector<BodyPose>& poses, TermState* state, Eigen::Ref<Eigen::VectorXd> r,
                 Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override {
-    term_->Evaluate(poses, state, r, J_a, J_b);
-    r -= rhs_;
+    auto* st = static_cast<ShiftedState*>(state);
+    term_->Evaluate(poses, st->inner.get(), r, J_a, J_b);
+    r -= st->rhs;
   }
   bool has_hessian() const override { return term_->has_hessian(); }
   void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override {
-    term_->AddWeightedHessian(poses, state, w, h);
+    term_->AddWeightedHessian(poses, static_cast<ShiftedState*>(state)->inner.get(), w, h);
   }
 
  private:

@@ -100,7 +100,13 @@ TermPtr HalfSpaceGoal(const Attachment& at, const Eigen::Vector3d& origin,
 /// goal switches (the solver sees a different goal from then on).
 TermPtr DisjunctionGoal(std::vector<TermPtr> goals);
 /// r(q) − rhs (rhs: dim values): the constraint r(q) = rhs (or ≥ rhs) of a design study, whose
-/// multiplier is the optimum's sensitivity to rhs. State, Jacobians and curvature are r's.
+/// multiplier is the optimum's sensitivity to rhs. Jacobians and curvature are r's. The rhs is
+/// per-solve data (a sweep moves it case by case on one shared problem): ShiftedState, made with
+/// the given rhs, holds it and r's own state.
 TermPtr Shifted(TermPtr term, const Eigen::VectorXd& rhs);
+struct ShiftedState final : TermState {
+  std::unique_ptr<TermState> inner;  ///< r's state (nullptr for a stateless r)
+  Eigen::VectorXd rhs;
+};
 
 }  // namespace tangent::optimizer

@@ -105,6 +105,13 @@ class ProblemData {
     }
     throw std::invalid_argument("problem data: no state for term '" + term.name() + "'");
   }
+  /// Whether `term` is an entry of the problem with a state.
+  bool HasState(const Term& term) const {
+    for (const auto& [t, st] : index_) {
+      if (t == &term) return true;
+    }
+    return false;
+  }
 
  private:
   std::array<std::vector<std::unique_ptr<TermState>>, 3> states_;

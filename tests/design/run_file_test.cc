@@ -57,7 +57,7 @@ TEST(RunFileTest, AGoodRunFileNamesTheScenesParts) {
 TEST(RunFileTest, BadInputIsRejectedNamingFilePointerAndProblem) {
   EXPECT_EQ(ErrorOf("\"objective\"", "\"objectve\""),
             "run.json: /objectve: unknown field \"objectve\" (known: bounds, comment, constraints, "
-            "length_unit, objective, scene, solver, starts)");
+            "grid, length_unit, objective, scene, solver, starts)");
   EXPECT_THAT(ErrorOf("three_link_finger.json", "nowhere.json"),
               HasSubstr("run.json: /scene: the scene could not be loaded: "));
   EXPECT_THAT(ErrorOf("\"middle joint\"]", "\"midle joint\"]"),
@@ -101,6 +101,37 @@ TEST(RunFileTest, BadInputIsRejectedNamingFilePointerAndProblem) {
   } catch (const RunError& e) {
     EXPECT_THAT(e.what(), HasSubstr("run.json: not valid JSON: "));
   }
+}
+
+TEST(RunFileTest, GridAxesAreCheckedAndMultiplyTheCases) {
+  auto with_grid = [](const std::string& grid) {
+    std::string text = kGood;
+    text.replace(text.find("\"starts\""), 8, "\"grid\": " + grid + ", \"starts\"");
+    return text;
+  };
+  const RunSpec run =
+      Parse(with_grid(R"([{"constraint": "tip on the surface", "range": [0, 0.01, 3]}])"));
+  ASSERT_EQ(run.grid.size(), 1u);
+  EXPECT_EQ(run.grid[0].values, (std::vector<double>{0.0, 0.005, 0.01}));
+  EXPECT_EQ(run.num_cases(), 4 * 3);
+  auto error = [&](const std::string& grid) {
+    try {
+      Parse(with_grid(grid));
+    } catch (const RunError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(error(R"([{"constraint": "tip", "values": [0]}])"),
+            "run.json: /grid/0/constraint: no constraint named \"tip\"");
+  EXPECT_EQ(error(R"([{"constraint": "tip on the surface", "range": [1, 0, 3]}])"),
+            "run.json: /grid/0/range: empty or inverted range: first must be below last");
+  EXPECT_EQ(error(R"([{"constraint": "tip on the surface", "range": [0, 1, 1]}])"),
+            "run.json: /grid/0/range/2: the count must be an integer in [2, 10000]");
+  EXPECT_EQ(error(R"([{"constraint": "tip on the surface", "values": [0], "range": [0, 1, 2]}])"),
+            "run.json: /grid/0: give either \"values\" or \"range\"");
+  EXPECT_EQ(error(R"([{"constraint": "tip on the surface", "row": 1, "values": [0]}])"),
+            "run.json: /grid/0/row: must be in [0, 0], got 1");
 }
 
 TEST(RunFileTest, AGraspDistanceMustEnterAsACost) {

@@ -49,7 +49,7 @@ void CompareWithIpopt(const std::string& run_file) {
     bool ok = false;
     const Eigen::VectorXd q0 = study.StartConfiguration(i, &ok);
     ASSERT_TRUE(ok) << i;
-    study.SeedContacts(q0, &ipopt.data());
+    study.PrepareData(i, q0, &ipopt.data());
     const optimizer::testing::IpoptResult ref = ipopt.Solve(q0);
     std::printf("%s case %d: ours %.10f (%s, %d iterations, %.1f ms), IPOPT %.10f (%s, %d)\n",
                 run_file.c_str(), i, ours.objective, ours.status.c_str(), ours.iterations,
@@ -117,6 +117,27 @@ TEST(StudyTest, SensitivitiesMatchReSolvedCentralDifferences) {
   EXPECT_NEAR(d_rhs, fd_rhs, 1e-4 * std::abs(fd_rhs));
   EXPECT_NEAR(d_max, fd_max, 1e-4 * std::abs(fd_max));
   EXPECT_GT(d_max, 0.0);  // the bound holds the finger back from a better pose
+}
+
+TEST(StudyTest, AGridPointSolvesLikeARunWithItsRightHandSide) {
+  // The rhs is per-solve data: case k of a grid over the surface constraint's rhs is the run
+  // with that rhs written in the file.
+  const std::string start = R"({"list": [{"joints_deg": {"turntable": -120, "knuckle": 80,
+                                                         "middle joint": 40}}]})";
+  std::string text = FingerRun(0.0, 150.0, start);
+  text.replace(text.find("\"starts\""), 8,
+               R"("grid": [{"constraint": "tip on the surface", "values": [0, 0.01]}], "starts")");
+  const Study grid(Parse(text));
+  ASSERT_EQ(grid.num_cases(), 2);
+  const CaseResult a = grid.Solve(1);
+  ASSERT_EQ(a.grid.size(), 1u);
+  EXPECT_EQ(a.grid[0].first, "tip on the surface row 0");
+  EXPECT_EQ(a.grid[0].second, 0.01);
+  const Study direct(Parse(FingerRun(0.01, 150.0, start)));
+  const CaseResult b = direct.Solve(0);
+  EXPECT_EQ(a.status, "optimum");
+  EXPECT_EQ(a.objective, b.objective);
+  EXPECT_EQ(a.q, b.q);
 }
 
 TEST(StudyTest, OneAndTwoThreadsGiveIdenticalResults) {
