@@ -20,15 +20,18 @@ using Node = JsonNode<RunError>;
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 // The scene joint `name`, named at node n in errors.
-int JointNamed(const Node& n, const std::string& name, const server::Scene& s, bool revolute) {
+int JointNamed(const Node& n, const std::string& name, const server::Scene& s, bool revolute,
+               bool prismatic_too = false) {
   const int j = s.JointIndex(name);
   if (j < 0) {
     std::string names;
     for (const server::JointSpec& js : s.joints) names += (names.empty() ? "" : ", ") + js.name;
     n.Fail("no joint named \"" + name + "\" in the scene (joints: " + names + ")");
   }
-  if (revolute && s.joints[static_cast<size_t>(j)].type != "revolute") {
-    n.Fail("joint \"" + name + "\" is " + s.joints[static_cast<size_t>(j)].type + ", not revolute");
+  const std::string& type = s.joints[static_cast<size_t>(j)].type;
+  if (revolute && type != "revolute" && !(prismatic_too && type == "prismatic")) {
+    n.Fail("joint \"" + name + "\" is " + type +
+           (prismatic_too ? ", not revolute or prismatic" : ", not revolute"));
   }
   return j;
 }
@@ -231,20 +234,66 @@ void ParseGrid(const Node& n, double unit, RunSpec* run) {
   if (run->num_grid_points() > 1000000) n.Fail("more than 10^6 grid points");
 }
 
-void ParseStarts(const Node& n, RunSpec* run) {
+void ParseDesignJoints(const Node& n, double unit, RunSpec* run) {
+  const server::Scene& s = *run->scene;
+  for (size_t i = 0; i < n.Size(); ++i) {
+    const Node d = n.At(i);
+    DesignJointSpec ds;
+    ds.joint = JointNamed(d.At("joint"), d.At("joint").String(), s, true, true);
+    const server::JointSpec& js = s.joints[static_cast<size_t>(ds.joint)];
+    ds.prismatic = js.type == "prismatic";
+    for (const DesignJointSpec& other : run->design_joints) {
+      if (other.joint == ds.joint) d.At("joint").Fail("joint is a design parameter twice");
+    }
+    for (const BoundSpec& b : run->bounds) {
+      if (b.joint == ds.joint) d.At("joint").Fail("joint is bounded as a motion (bounds) too");
+    }
+    if (js.limits) d.At("joint").Fail("the scene already limits this joint (limits_deg)");
+    for (const MeasureSpec& m : run->terms) {
+      for (int j : m.joints) {
+        if (j == ds.joint) d.At("joint").Fail("a design joint cannot drive a measure's motion");
+      }
+    }
+    if (ds.prismatic) {
+      d.OnlyKeys({"joint", "min", "max"});
+      ds.lo = unit * d.At("min").Number();
+      ds.hi = unit * d.At("max").Number();
+    } else {
+      d.OnlyKeys({"joint", "min_deg", "max_deg"});
+      ds.lo = d.At("min_deg").Number() * kDeg;
+      ds.hi = d.At("max_deg").Number() * kDeg;
+    }
+    if (!(ds.lo < ds.hi)) d.Fail("empty or inverted bounds: the minimum must be below the maximum");
+    run->design_joints.push_back(ds);
+  }
+}
+
+void ParseStarts(const Node& n, double unit, RunSpec* run) {
   n.OnlyKeys({"list", "random", "seed", "joints"});
   const server::Scene& s = *run->scene;
   if (n.Has("list")) {
     const Node list = n.At("list");
     for (size_t i = 0; i < list.Size(); ++i) {
       const Node st = list.At(i);
-      st.OnlyKeys({"joints_deg"});
+      st.OnlyKeys({"joints_deg", "joints_m"});
       StartSpec start;
-      const Node angles = st.At("joints_deg");
-      if (!angles.j.is_object()) angles.Fail("must be an object {\"joint name\": degrees}");
-      for (const auto& [name, value] : angles.j.items()) {
-        const Node a = angles.At(name);
-        start.angles[JointNamed(a, name, s, true)] = a.Number() * kDeg;
+      if (st.Has("joints_deg")) {
+        const Node angles = st.At("joints_deg");
+        if (!angles.j.is_object()) angles.Fail("must be an object {\"joint name\": degrees}");
+        for (const auto& [name, value] : angles.j.items()) {
+          const Node a = angles.At(name);
+          start.angles[JointNamed(a, name, s, true)] = a.Number() * kDeg;
+        }
+      }
+      if (st.Has("joints_m")) {  // prismatic joints' displacements
+        const Node lengths = st.At("joints_m");
+        if (!lengths.j.is_object()) lengths.Fail("must be an object {\"joint name\": length}");
+        for (const auto& [name, value] : lengths.j.items()) {
+          const Node a = lengths.At(name);
+          const int j = JointNamed(a, name, s, false);
+          if (s.joints[static_cast<size_t>(j)].type != "prismatic") a.Fail("not a prismatic joint");
+          start.angles[j] = unit * a.Number();
+        }
       }
       run->starts.push_back(std::move(start));
     }
@@ -262,7 +311,11 @@ void ParseStarts(const Node& n, RunSpec* run) {
     }
   } else {
     for (size_t j = 0; j < s.joints.size(); ++j) {
-      if (s.joints[j].type == "revolute") run->random_joints.push_back(static_cast<int>(j));
+      bool design = false;
+      for (const DesignJointSpec& d : run->design_joints) design |= d.joint == static_cast<int>(j);
+      if (s.joints[j].type == "revolute" || design) {
+        run->random_joints.push_back(static_cast<int>(j));
+      }
     }
   }
   if (run->num_starts() == 0) n.Fail("no start: give \"list\" or \"random\" > 0");
@@ -278,8 +331,8 @@ RunSpec ParseRun(const std::string& text, const std::string& where, const std::s
     throw RunError(where + ": not valid JSON: " + e.what());
   }
   const Node root{j, where, "", Node::Style::kPointer};
-  root.OnlyKeys({"comment", "scene", "length_unit", "objective", "constraints", "bounds", "grid",
-                 "starts", "solver"});
+  root.OnlyKeys({"comment", "scene", "length_unit", "objective", "constraints", "bounds", "design",
+                 "grid", "starts", "solver"});
   RunSpec run;
   run.path = where;
   const std::string scene = root.At("scene").String();
@@ -299,8 +352,9 @@ RunSpec ParseRun(const std::string& text, const std::string& where, const std::s
   ParseObjective(root.At("objective"), unit, &run);
   if (root.Has("constraints")) ParseConstraints(root.At("constraints"), unit, &run);
   if (root.Has("bounds")) ParseBounds(root.At("bounds"), &run);
+  if (root.Has("design")) ParseDesignJoints(root.At("design"), unit, &run);
   if (root.Has("grid")) ParseGrid(root.At("grid"), unit, &run);
-  ParseStarts(root.At("starts"), &run);
+  ParseStarts(root.At("starts"), unit, &run);
   if (root.Has("solver")) {
     const Node sv = root.At("solver");
     sv.OnlyKeys({"max_iterations", "relative_kkt_tolerance", "constraint_tolerance"});

@@ -48,14 +48,25 @@ struct ConstraintSpec {
   int surface = -1;
 };
 
+/// A design parameter: a scene joint (prismatic: a length; revolute: an angle) whose coordinate
+/// the study chooses within [lo, hi] (m or rad) — a link's length as a slider in the link, an
+/// attachment point or a surface's placement on a sub-body. It is held still where the
+/// mechanism's mobility is defined (the dexterity's), so it is a design, not a motion.
+struct DesignJointSpec {
+  int joint = 0;
+  bool prismatic = true;
+  double lo = 0.0, hi = 0.0;
+};
+
 /// Bounds on a revolute joint's angle (radians inside; degrees in the file).
 struct BoundSpec {
   int joint = 0;
   double lo = 0.0, hi = 0.0;
 };
 
-/// A start: joint angles (radians) the configuration is assembled to before the design solve;
-/// joints not named keep the scene's initial pose as far as the closure allows.
+/// A start: joint coordinates (revolute: radians; prismatic: metres) the configuration is
+/// assembled to before the design solve; joints not named keep the scene's initial pose as far
+/// as the closure allows.
 struct StartSpec {
   std::map<int, double> angles;
 };
@@ -76,9 +87,11 @@ struct RunSpec {
   std::vector<MeasureSpec> terms;
   std::vector<ConstraintSpec> constraints;
   std::vector<BoundSpec> bounds;
+  std::vector<DesignJointSpec> design_joints;
   std::vector<StartSpec> starts;
-  /// N seeded random starts: angles of `random_joints` drawn uniformly within their bounds
-  /// (or (−π, π] when unbounded) by a generator seeded with (seed, start index).
+  /// N seeded random starts: coordinates of `random_joints` drawn uniformly within their
+  /// bounds (or (−π, π] when unbounded; design joints within theirs) by a generator seeded with
+  /// (seed, start index).
   int random_starts = 0;
   uint64_t seed = 1;
   std::vector<int> random_joints;

@@ -98,6 +98,15 @@ Study::Study(RunSpec run)
     inequality_names_.push_back({"bound " + js.name, "bound",
                                  problem_.inequalities()[static_cast<size_t>(l)].row, 2, b.joint});
   }
+  // Design joints: free within their bounds in the problem, held still in the mechanism whose
+  // mobility the dexterity measures.
+  for (const DesignJointSpec& d : run_.design_joints) {
+    const server::JointSpec& js = s.joints[static_cast<size_t>(d.joint)];
+    const int l = problem_.AddInequality(DesignBounds(d));
+    inequality_names_.push_back({"design " + js.name, d.prismatic ? "design_m" : "bound",
+                                 problem_.inequalities()[static_cast<size_t>(l)].row, 2, d.joint});
+    joints_only_.AddEquality(optimizer::JointCoordinate(js.type, js.a, js.b));
+  }
   for (const ConstraintSpec& c : run_.constraints) {
     if (c.inequality) {
       const int k = problem_.AddInequality(c.term);
@@ -141,6 +150,12 @@ Study::Study(RunSpec run)
   problem_.set_least_astonishment(0.0);
 }
 
+optimizer::TermPtr Study::DesignBounds(const DesignJointSpec& d) const {
+  const server::JointSpec& js = run_.scene->joints[static_cast<size_t>(d.joint)];
+  return d.prismatic ? optimizer::PrismaticLimits(js.a, js.b, d.lo, d.hi)
+                     : optimizer::RevoluteLimits(js.a, js.b, d.lo, d.hi);
+}
+
 double Study::Objective(const Eigen::VectorXd& q,
                         std::vector<std::pair<std::string, double>>* measures) const {
   std::vector<contact::BodyPose> poses;
@@ -178,6 +193,9 @@ std::map<int, double> Study::StartAngles(int index) const {
     for (const BoundSpec& b : run_.bounds) {
       if (b.joint == j) lo = b.lo, hi = b.hi;
     }
+    for (const DesignJointSpec& d : run_.design_joints) {
+      if (d.joint == j) lo = d.lo, hi = d.hi;
+    }
     // (uniform_real_distribution's algorithm is the library's: fixed for one build.)
     const double t = static_cast<double>(gen() >> 11) * 0x1.0p-53;
     angles[j] = lo + (hi - lo) * t;
@@ -205,6 +223,7 @@ Eigen::VectorXd Study::Assemble(int index, const std::map<int, double>& angles, 
         const server::JointSpec& js = s.joints[static_cast<size_t>(b.joint)];
         p.AddInequality(optimizer::RevoluteLimits(js.a, js.b, b.lo, b.hi));
       }
+      for (const DesignJointSpec& d : run_.design_joints) p.AddInequality(DesignBounds(d));
       for (const ConstraintSpec& c : run_.constraints) {
         if (c.inequality) {
           p.AddInequality(c.term);
@@ -215,8 +234,11 @@ Eigen::VectorXd Study::Assemble(int index, const std::map<int, double>& angles, 
     }
     for (const auto& [j, theta] : angles) {
       const server::JointSpec& js = s.joints[static_cast<size_t>(j)];
-      // (θ − lo)² + (hi − θ)² is least at the middle of [lo, hi]: a goal on the angle.
-      p.AddObjective(optimizer::RevoluteLimits(js.a, js.b, theta - 1e-3, theta + 1e-3), 1.0);
+      // (x − lo)² + (hi − x)² is least at the middle of [lo, hi]: a goal on the coordinate.
+      p.AddObjective(js.type == "prismatic"
+                         ? optimizer::PrismaticLimits(js.a, js.b, theta - 1e-4, theta + 1e-4)
+                         : optimizer::RevoluteLimits(js.a, js.b, theta - 1e-3, theta + 1e-3),
+                     1.0);
     }
     p.set_least_astonishment(1e-9);
     optimizer::SolverOptions o;
@@ -303,7 +325,9 @@ CaseResult Study::Solve(int index) const {
   r.index = index;
   const std::map<int, double> angles = StartAngles(index);
   for (const auto& [j, theta] : angles) {
-    r.start_deg.emplace_back(s.joints[static_cast<size_t>(j)].name, theta / kDeg);
+    const bool prismatic = s.joints[static_cast<size_t>(j)].type == "prismatic";
+    r.start_deg.emplace_back(s.joints[static_cast<size_t>(j)].name + (prismatic ? " (m)" : ""),
+                             prismatic ? theta : theta / kDeg);
   }
   const auto t0 = Clock::now();
   bool assembled = false;
@@ -345,6 +369,12 @@ CaseResult Study::Solve(int index) const {
       r.joints_deg.emplace_back(js.name, optimizer::RevoluteAngle(js.a, js.b, poses) / kDeg);
     }
   }
+  for (const DesignJointSpec& d : run_.design_joints) {
+    const server::JointSpec& js = s.joints[static_cast<size_t>(d.joint)];
+    r.design.emplace_back(js.name + (d.prismatic ? " (m)" : " (deg)"),
+                          d.prismatic ? optimizer::PrismaticDisplacement(js.a, js.b, poses)
+                                      : optimizer::RevoluteAngle(js.a, js.b, poses) / kDeg);
+  }
   for (const ConstraintSpec& c : run_.constraints) {
     if (c.surface < 0) continue;
     const auto& shifted = solver.data().StateAs<optimizer::ShiftedState>(*c.term);
@@ -366,6 +396,9 @@ CaseResult Study::Solve(int index) const {
       const double l = li[n.first_row + k];
       if (n.kind == "constraint") {
         r.sensitivities.push_back({n.constraint, k, "rhs", l, sign_ * l, l > 0.0});
+      } else if (n.kind == "design_m") {  // d − lo ≥ 0, hi − d ≥ 0; per metre
+        r.sensitivities.push_back({n.constraint, k, k == 0 ? "min" : "max", l,
+                                   (k == 0 ? 1.0 : -1.0) * sign_ * l, l > 0.0});
       } else {  // θ − lo ≥ 0 (row 0), hi − θ ≥ 0 (row 1); per degree
         r.sensitivities.push_back({n.constraint, k, k == 0 ? "min_deg" : "max_deg", l,
                                    (k == 0 ? 1.0 : -1.0) * sign_ * l * kDeg, l > 0.0});
@@ -420,6 +453,7 @@ bool Study::ReportInfeasible(int index, CaseResult* r) const {
     const server::JointSpec& js = s.joints[static_cast<size_t>(b.joint)];
     p.AddInequality(optimizer::RevoluteLimits(js.a, js.b, b.lo, b.hi));
   }
+  for (const DesignJointSpec& d : run_.design_joints) p.AddInequality(DesignBounds(d));
   std::vector<int> soft;
   for (size_t k = 0; k < run_.constraints.size(); ++k) {
     const ConstraintSpec& c = run_.constraints[k];
@@ -493,6 +527,9 @@ nlohmann::json Study::ToJson(const CaseResult& c) const {
   nlohmann::json joints = nlohmann::json::object();
   for (const auto& [name, deg] : c.joints_deg) joints[name] = deg;
   j["joints_deg"] = joints;
+  nlohmann::json design = nlohmann::json::object();
+  for (const auto& [name, value] : c.design) design[name] = value;
+  j["design"] = design;
   nlohmann::json contacts = nlohmann::json::object();
   for (const auto& [name, u] : c.contacts) contacts[name] = {u[0], u[1]};
   j["contacts_uv"] = contacts;

@@ -42,6 +42,7 @@ struct CaseResult {
   std::vector<optimizer::IterationRecord> history;  ///< objective as F
   Eigen::VectorXd q;
   std::vector<std::pair<std::string, double>> joints_deg;  ///< every revolute joint's angle
+  std::vector<std::pair<std::string, double>> design;      ///< design joints' values (m, deg)
   /// Point-on-surface constraints: the contact's (u, v) on its surface.
   std::vector<std::pair<std::string, Eigen::Vector2d>> contacts;
   std::vector<Sensitivity> sensitivities;
@@ -93,6 +94,7 @@ class Study {
   };
   /// The start of case `index`: the scene's joints at `angles` (*ok), then the run's
   /// constraints and bounds met too where they can be (*feasible, may be null).
+  optimizer::TermPtr DesignBounds(const DesignJointSpec& d) const;
   Eigen::VectorXd Assemble(int index, const std::map<int, double>& angles, bool* ok,
                            bool* feasible) const;
   /// Finds the least-violation point with the mechanism intact; when the run's equality

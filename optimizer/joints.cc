@@ -413,7 +413,99 @@ class RevoluteLimitsTerm final : public Term {
   double lo_, hi_;
 };
 
+// A prismatic joint's displacement d = (P_b − P_a)·(R_a axis_a) (the Offset row along a's axis):
+// limits d − lo ≥ 0 and hi − d ≥ 0, or (one row) d itself.
+class PrismaticCoordinateTerm final : public Term {
+ public:
+  PrismaticCoordinateTerm(const Attachment& a, const Attachment& b, bool limits, double lo,
+                          double hi)
+      : a_(Normalized(a, "prismatic limits")),
+        b_(Normalized(b, "prismatic limits")),
+        limits_(limits),
+        lo_(lo),
+        hi_(hi) {
+    if (limits && !(lo < hi)) throw std::invalid_argument("prismatic limits: need lo < hi");
+  }
+  std::string name() const override { return limits_ ? "prismatic_limits" : "joint_coordinate"; }
+  int dim() const override { return limits_ ? 2 : 1; }
+  int body_a() const override { return a_.body; }
+  int body_b() const override { return b_.body; }
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
+                Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                Eigen::Ref<Eigen::MatrixXd> J_b) const override {
+    Rows rows{r, J_a, J_b, 0};
+    rows.Offset(poses, a_, b_, a_.axis);
+    if (!limits_) return;
+    r[1] = hi_ - r[0];
+    r[0] -= lo_;
+    J_a.row(1) = -J_a.row(0);
+    J_b.row(1) = -J_b.row(0);
+  }
+  bool has_hessian() const override { return true; }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* /*state*/,
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override {
+    const Eigen::Matrix<double, 1, 1> omega(limits_ ? w[0] - w[1] : w[0]);
+    const Eigen::Ref<const Eigen::VectorXd> weights(omega);
+    HessianRows rows{weights, h};
+    rows.Offset(poses, a_, b_, a_.axis);
+  }
+
+ private:
+  Attachment a_, b_;
+  bool limits_;
+  double lo_, hi_;
+};
+
+// A revolute joint's angle θ as one row (RevoluteLimits' first row without its bound).
+class RevoluteCoordinateTerm final : public Term {
+ public:
+  RevoluteCoordinateTerm(const Attachment& a, const Attachment& b)
+      : limits_(a, b, -4.0, 4.0), a_(a), b_(b) {}
+  std::string name() const override { return "joint_coordinate"; }
+  int dim() const override { return 1; }
+  int body_a() const override { return limits_.body_a(); }
+  int body_b() const override { return limits_.body_b(); }
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* state, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override {
+    Eigen::Vector2d r2;
+    Eigen::Matrix<double, 2, 7> ja, jb;
+    limits_.Evaluate(poses, state, r2, ja, jb);
+    r[0] = r2[0] - 4.0;
+    J_a.row(0) = ja.row(0);
+    J_b.row(0) = jb.row(0);
+  }
+  bool has_hessian() const override { return true; }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override {
+    const Eigen::Vector2d w2(w[0], 0.0);
+    limits_.AddWeightedHessian(poses, state, w2, h);
+  }
+
+ private:
+  RevoluteLimitsTerm limits_;
+  Attachment a_, b_;
+};
+
 }  // namespace
+
+TermPtr PrismaticLimits(const Attachment& a, const Attachment& b, double lo, double hi) {
+  return std::make_shared<PrismaticCoordinateTerm>(a, b, true, lo, hi);
+}
+TermPtr JointCoordinate(const std::string& type, const Attachment& a, const Attachment& b) {
+  if (type == "prismatic") return std::make_shared<PrismaticCoordinateTerm>(a, b, false, 0, 0);
+  if (type == "revolute") return std::make_shared<RevoluteCoordinateTerm>(a, b);
+  throw std::invalid_argument("joint coordinate: a " + type +
+                              " joint has no single coordinate (revolute or prismatic)");
+}
+double PrismaticDisplacement(const Attachment& a, const Attachment& b,
+                             const std::vector<BodyPose>& poses) {
+  const Attachment an = Normalized(a, "prismatic displacement");
+  const Attachment bn = Normalized(b, "prismatic displacement");
+  return (PoseOf(poses, bn.body).Point(bn.point) - PoseOf(poses, an.body).Point(an.point))
+      .dot(PoseOf(poses, an.body).R_WB * an.axis);
+}
 
 TermPtr SphericalJoint(const Attachment& a, const Attachment& b) {
   return std::make_shared<Joint>(Kind::kSpherical, "spherical", a, b);

@@ -35,5 +35,15 @@ TermPtr UnitQuaternion(int body);
 TermPtr RevoluteLimits(const Attachment& a, const Attachment& b, double lo, double hi);
 /// The joint angle θ of RevoluteLimits (for tests and reports).
 double RevoluteAngle(const Attachment& a, const Attachment& b, const std::vector<BodyPose>& poses);
+/// Prismatic joint limits as two inequalities d − lo ≥ 0 and hi − d ≥ 0, d = (P_b − P_a)·(R_a
+/// axis_a) the displacement of b's point along a's axis (m).
+TermPtr PrismaticLimits(const Attachment& a, const Attachment& b, double lo, double hi);
+/// A revolute or prismatic joint's coordinate (θ or d) as one row: a design study holds a
+/// design joint still with it where the mechanism's mobility is defined (the Dexterity's C).
+/// @throws std::invalid_argument for another joint type.
+TermPtr JointCoordinate(const std::string& type, const Attachment& a, const Attachment& b);
+/// The displacement d of PrismaticLimits (for reports).
+double PrismaticDisplacement(const Attachment& a, const Attachment& b,
+                             const std::vector<BodyPose>& poses);
 
 }  // namespace tangent::optimizer

@@ -154,6 +154,8 @@ class Solver {
   /// Design mode: the BFGS update of B_ with the step from q_old_ to q and the change of the
   /// design gradient (gd_ − gd_old_).
   void UpdateDesignCurvature(const Eigen::VectorXd& q);
+  /// Design mode after a stall: B_ by forward differences of the design gradient at q.
+  void DesignCurvatureByDifferences(const Eigen::VectorXd& q);
   /// The Lagrangian E − λ_Eᵀc_E − λ_Iᵀc_I at the last Evaluate (design mode's line search).
   double Lagrangian(const Eigen::VectorXd& q) const;
 
@@ -182,6 +184,10 @@ class Solver {
   Eigen::MatrixXd B_;
   Eigen::VectorXd gd_, gd_old_, q_old_;
   bool have_old_ = false;
+  bool fd_curvature_ = false;  ///< after a stall: B by differences of the design gradient
+  double stall_kkt_ = 0.0;     ///< the KKT residual at the last halving (stall detection)
+  double last_step_ = 0.0;     ///< |Δq| of the last step taken
+  int stall_iterations_ = 0;
 };
 
 }  // namespace tangent::optimizer

@@ -57,6 +57,7 @@ TEST(RunFileTest, AGoodRunFileNamesTheScenesParts) {
 TEST(RunFileTest, BadInputIsRejectedNamingFilePointerAndProblem) {
   EXPECT_EQ(ErrorOf("\"objective\"", "\"objectve\""),
             "run.json: /objectve: unknown field \"objectve\" (known: bounds, comment, constraints, "
+            "design, "
             "grid, length_unit, objective, scene, solver, starts)");
   EXPECT_THAT(ErrorOf("three_link_finger.json", "nowhere.json"),
               HasSubstr("run.json: /scene: the scene could not be loaded: "));
@@ -132,6 +133,29 @@ TEST(RunFileTest, GridAxesAreCheckedAndMultiplyTheCases) {
             "run.json: /grid/0: give either \"values\" or \"range\"");
   EXPECT_EQ(error(R"([{"constraint": "tip on the surface", "row": 1, "values": [0]}])"),
             "run.json: /grid/0/row: must be in [0, 0], got 1");
+}
+
+TEST(RunFileTest, DesignJointsAreCheckedByType) {
+  auto error = [](const std::string& design) {
+    const std::string text = R"({"scene": "three_link_finger_design.json",
+      "objective": {"terms": [{"measure": "dexterity", "end_effector": {"body": "distal"},
+                               "joints": ["turntable", "knuckle", "middle joint"]}]},
+      "design": )" + design + R"(, "starts": {"random": 1}})";
+    try {
+      const RunSpec run = Parse(text);
+      return "accepted " + std::to_string(run.design_joints.size());
+    } catch (const RunError& e) {
+      return std::string(e.what());
+    }
+  };
+  EXPECT_EQ(error(R"([{"joint": "middle length", "min": -0.1, "max": 0.1}])"), "accepted 1");
+  EXPECT_EQ(error(R"([{"joint": "middle length", "min": 0.1, "max": -0.1}])"),
+            "run.json: /design/0: empty or inverted bounds: the minimum must be below the "
+            "maximum");
+  EXPECT_EQ(error(R"([{"joint": "knuckle", "min_deg": 0, "max_deg": 90}])"),
+            "run.json: /design/0/joint: a design joint cannot drive a measure's motion");
+  EXPECT_EQ(error(R"([{"joint": "middle length", "min_deg": 0, "max_deg": 90}])"),
+            "run.json: /design/0/max_deg: unknown field \"max_deg\" (known: joint, max, min)");
 }
 
 TEST(RunFileTest, AGraspDistanceMustEnterAsACost) {

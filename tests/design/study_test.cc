@@ -79,6 +79,37 @@ TEST(StudyTest, FourBarExampleReachesIpoptsOptimumFromEveryListedStart) {
   CompareWithIpopt("fourbar_dexterity.run.json");
 }
 
+TEST(StudyTest, AdjustableLinkExampleReachesIpoptsOptimumFromEveryListedStart) {
+  CompareWithIpopt("three_link_finger_design.run.json");
+}
+
+TEST(StudyTest, ADesignJointsBoundSensitivityMatchesReSolvedDifferences) {
+  // The middle link's length at its upper bound: dF*/d(max) against re-solves with the bound
+  // moved by ±ε (metres).
+  auto run_with_max = [](double max) {
+    std::ifstream in(kScenes + "/three_link_finger_design.run.json");
+    nlohmann::json j = nlohmann::json::parse(in);
+    j["design"][0]["max"] = max;
+    j["starts"] = nlohmann::json::parse(R"({"list": [{"joints_deg": {"turntable": -120,
+        "knuckle": 100, "middle joint": 40}, "joints_m": {"middle length": 0.0}}]})");
+    return Study(ParseRun(j.dump(), "run.json", kScenes)).Solve(0);
+  };
+  const CaseResult r = run_with_max(0.1);
+  ASSERT_EQ(r.status, "optimum");
+  ASSERT_EQ(r.design.size(), 1u);
+  EXPECT_NEAR(r.design[0].second, 0.1, 1e-12);  // the longest link allowed
+  double reported = 0.0;
+  for (const Sensitivity& s : r.sensitivities) {
+    if (s.constraint == "design middle length" && s.wrt == "max") reported = s.derivative;
+  }
+  const double eps = 1e-5;
+  const double fd =
+      (run_with_max(0.1 + eps).objective - run_with_max(0.1 - eps).objective) / (2 * eps);
+  std::printf("dF/d(max length): reported %.9g, re-solved %.9g\n", reported, fd);
+  EXPECT_GT(reported, 0.0);
+  EXPECT_NEAR(reported, fd, 1e-4 * std::abs(fd));
+}
+
 TEST(StudyTest, SensitivitiesMatchReSolvedCentralDifferences) {
   // A knuckle bound at 98° holds the finger back (active; the free optimum is at 100.5°), the
   // tip on the surface (rhs 0).

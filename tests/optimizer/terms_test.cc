@@ -164,7 +164,8 @@ TEST(TermsTest, JointJacobiansMatchFiniteDifferences) {
   for (const TermPtr& t :
        {SphericalJoint(a, b), RevoluteJoint(a, b), UniversalJoint(a, b), CylindricalJoint(a, b),
         PrismaticJoint(a, b), FixedJoint(a, b), RevoluteJoint(g, b), UnitQuaternion(f.a),
-        RevoluteLimits(a, b, -1.0, 2.0)}) {
+        RevoluteLimits(a, b, -1.0, 2.0), PrismaticLimits(a, b, -0.5, 0.25),
+        JointCoordinate("prismatic", a, b), JointCoordinate("revolute", a, b)}) {
     CheckTerm(f, *t, rng);
     CheckHessian(f, *t, rng);
   }
