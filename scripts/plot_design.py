@@ -138,6 +138,8 @@ def mechanism(result, out):
     ax.set_zlabel("z (m)")
     best = next(c for c in result["results"] if c["case"] == result["best_case"])
     joints = ", ".join(f"{k} {v:.1f}°" for k, v in best["joints_deg"].items())
+    if best.get("design"):
+        joints += "; design: " + ", ".join(f"{k} {v:.4g}" for k, v in best["design"].items())
     ax.set_title(f"{os.path.basename(result['run'])}: best {result['objective'][0]['measure']} "
                  f"{result['best_objective']:.6g}\n{joints}\n" + "\n".join(notes), fontsize=9)
     ax.legend(loc="upper left", fontsize=8)
