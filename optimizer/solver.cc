@@ -125,22 +125,48 @@ void Solver::UpdateDesignCurvature(const Eigen::VectorXd& q) {
 }
 
 void Solver::DesignCurvatureByDifferences(const Eigen::VectorXd& q) {
-  // B = ∂(−Σ w ∇f)/∂q by forward differences of the analytic gradient (gd_ holds it at q),
-  // symmetrized; steps of 1e-7 (the gradient's own relative error is ~1e-12 here, so the
-  // difference keeps ~5 digits: enough for Newton's superlinear convergence).
-  Eigen::VectorXd qh = q, g(n_), gk;
+  // Only the curvature along the motions the active constraints leave free matters (across
+  // them μJᵀJ dominates the Newton matrix): with Z an orthonormal basis of the null space of
+  // the equalities' and active inequalities' Jacobian, B = Z (Zᵀ H Z) Zᵀ, H Z by forward
+  // differences of the analytic design gradient (gd_ holds it at q) along Z's columns — as
+  // many gradients as free motions (2 for the adjustable-link finger, not its 28
+  // coordinates). Steps of 1e-7: the gradient's own relative error is ~1e-12 here, so the
+  // difference keeps ~5 digits, enough for Newton's superlinear convergence.
+  const int me = ev_.c_e().size(), mi = ev_.c_i().size();
+  Eigen::MatrixXd J(me + mi, n_);
+  Eigen::VectorXd e = Eigen::VectorXd::Zero(n_), ce(me), ci(mi);
   for (int k = 0; k < n_; ++k) {
-    const double h = 1e-7 * std::max(1.0, std::abs(q[k]));
-    qh[k] = q[k] + h;
+    e[k] = 1.0;
+    ev_.JacobianTimes(ProblemEvaluator::kEquality, e, &ce);
+    ev_.JacobianTimes(ProblemEvaluator::kInequality, e, &ci);
+    J.col(k) << ce, ci;
+    e[k] = 0.0;
+  }
+  int rows = me;
+  for (int i = 0; i < mi; ++i) {
+    if (lambda_i_[i] > 0.0) J.row(rows++) = J.row(me + i);
+  }
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(J.topRows(rows));
+  lu.setThreshold(1e-10);
+  const Eigen::MatrixXd kernel = lu.kernel();
+  B_.setZero();
+  if (lu.rank() == n_ || kernel.cols() == 0) return;
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(kernel);
+  const Eigen::MatrixXd Z = qr.householderQ() * Eigen::MatrixXd::Identity(n_, kernel.cols());
+  const double h = 1e-7 * std::max(1.0, q.cwiseAbs().maxCoeff());
+  Eigen::MatrixXd HZ(n_, Z.cols());
+  Eigen::VectorXd g(n_), gk;
+  for (int c = 0; c < Z.cols(); ++c) {
     g.setZero();
     for (const Problem::DesignEntry& d : problem_.design_objectives()) {
-      d.f->Gradient(qh, &gk);
+      d.f->Gradient(q + h * Z.col(c), &gk);
       g -= d.weight * gk;
     }
-    B_.col(k) = (g - gd_) / h;
-    qh[k] = q[k];
+    HZ.col(c) = (g - gd_) / h;
   }
-  B_ = (0.5 * (B_ + B_.transpose())).eval();
+  Eigen::MatrixXd reduced = Z.transpose() * HZ;
+  reduced = (0.5 * (reduced + reduced.transpose())).eval();
+  B_.noalias() = Z * reduced * Z.transpose();
 }
 
 double Solver::Lagrangian(const Eigen::VectorXd& q) const {
@@ -386,10 +412,12 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     if (design) {
       // A stalled solve (the KKT residual not halved in 10 iterations): the BFGS model has
       // learned curvature that does not hold (steps shrink while the residual stays). From
-      // then on the design curvature is the forward difference of the analytic design
-      // gradient, n gradients per iteration: Newton's method to the end. (Measured: the finger
-      // with an adjustable link at its length bound stalled at KKT 8e-3 with steps of 1e-7
-      // under BFGS, and a reset BFGS stalled again at 4e-6.)
+      // then on the design curvature along the free motions is the forward difference of the
+      // analytic design gradient, one gradient per free motion: Newton's method to the end.
+      // (Measured: the finger with an adjustable link at its length bound stalled at KKT 8e-3
+      // with steps of 1e-7 under BFGS, and a reset BFGS stalled again at 4e-6. From the start,
+      // far from a solution, the exact but indefinite curvature led the arm on a plane to a
+      // saddle of zero dexterity: hence only near one.)
       if (st.iterations == 0 || st.kkt_residual < 0.5 * stall_kkt_) {
         stall_kkt_ = st.kkt_residual;
         stall_iterations_ = 0;

@@ -154,7 +154,8 @@ class Solver {
   /// Design mode: the BFGS update of B_ with the step from q_old_ to q and the change of the
   /// design gradient (gd_ − gd_old_).
   void UpdateDesignCurvature(const Eigen::VectorXd& q);
-  /// Design mode after a stall: B_ by forward differences of the design gradient at q.
+  /// Design mode after a stall: B_ = Z (Zᵀ H Z) Zᵀ, Z the active constraints' free motions, H Z
+  /// by forward differences of the design gradient at q.
   void DesignCurvatureByDifferences(const Eigen::VectorXd& q);
   /// The Lagrangian E − λ_Eᵀc_E − λ_Iᵀc_I at the last Evaluate (design mode's line search).
   double Lagrangian(const Eigen::VectorXd& q) const;
