@@ -124,14 +124,9 @@ void Solver::UpdateDesignCurvature(const Eigen::VectorXd& q) {
   have_old_ = true;
 }
 
-void Solver::DesignCurvatureByDifferences(const Eigen::VectorXd& q) {
-  // Only the curvature along the motions the active constraints leave free matters (across
-  // them μJᵀJ dominates the Newton matrix): with Z an orthonormal basis of the null space of
-  // the equalities' and active inequalities' Jacobian, B = Z (Zᵀ H Z) Zᵀ, H Z by forward
-  // differences of the analytic design gradient (gd_ holds it at q) along Z's columns — as
-  // many gradients as free motions (2 for the adjustable-link finger, not its 28
-  // coordinates). Steps of 1e-7: the gradient's own relative error is ~1e-12 here, so the
-  // difference keeps ~5 digits, enough for Newton's superlinear convergence.
+Eigen::MatrixXd Solver::FreeMotions() const {
+  // The active constraints (equalities, inequalities with a positive multiplier) at the last
+  // Evaluate, their Jacobian assembled column by column; an orthonormal basis of its null space.
   const int me = ev_.c_e().size(), mi = ev_.c_i().size();
   Eigen::MatrixXd J(me + mi, n_);
   Eigen::VectorXd e = Eigen::VectorXd::Zero(n_), ce(me), ci(mi);
@@ -148,11 +143,23 @@ void Solver::DesignCurvatureByDifferences(const Eigen::VectorXd& q) {
   }
   Eigen::FullPivLU<Eigen::MatrixXd> lu(J.topRows(rows));
   lu.setThreshold(1e-10);
+  if (lu.rank() == n_) return Eigen::MatrixXd(n_, 0);
   const Eigen::MatrixXd kernel = lu.kernel();
-  B_.setZero();
-  if (lu.rank() == n_ || kernel.cols() == 0) return;
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(kernel);
-  const Eigen::MatrixXd Z = qr.householderQ() * Eigen::MatrixXd::Identity(n_, kernel.cols());
+  return qr.householderQ() * Eigen::MatrixXd::Identity(n_, kernel.cols());
+}
+
+void Solver::DesignCurvatureByDifferences(const Eigen::VectorXd& q) {
+  // Only the curvature along the motions the active constraints leave free matters (across
+  // them μJᵀJ dominates the Newton matrix): with Z an orthonormal basis of the null space of
+  // the equalities' and active inequalities' Jacobian, B = Z (Zᵀ H Z) Zᵀ, H Z by forward
+  // differences of the analytic design gradient (gd_ holds it at q) along Z's columns — as
+  // many gradients as free motions (2 for the adjustable-link finger, not its 28
+  // coordinates). Steps of 1e-7: the gradient's own relative error is ~1e-12 here, so the
+  // difference keeps ~5 digits, enough for Newton's superlinear convergence.
+  const Eigen::MatrixXd Z = FreeMotions();
+  B_.setZero();
+  if (Z.cols() == 0) return;
   const double h = 1e-7 * std::max(1.0, q.cwiseAbs().maxCoeff());
   Eigen::MatrixXd HZ(n_, Z.cols());
   Eigen::VectorXd g(n_), gk;
@@ -258,34 +265,14 @@ void Solver::SecondOrderCheck(const Eigen::VectorXd& q, SolveStats* st) {
   mu_ = mu;
   Eigen::MatrixXd H = H_.is_sparse() ? Eigen::MatrixXd(H_.sparse()) : H_.dense();
   H = Eigen::MatrixXd(H.selfadjointView<Eigen::Upper>());
-  // Active constraints: equalities and inequalities with a positive multiplier, their Jacobian
-  // assembled column by column.
-  const int me = ev_.c_e().size(), mi = ev_.c_i().size();
-  Eigen::MatrixXd J(me + mi, n_);
-  Eigen::VectorXd e = Eigen::VectorXd::Zero(n_), ce(me), ci(mi);
-  for (int k = 0; k < n_; ++k) {
-    e[k] = 1.0;
-    ev_.JacobianTimes(ProblemEvaluator::kEquality, e, &ce);
-    ev_.JacobianTimes(ProblemEvaluator::kInequality, e, &ci);
-    J.col(k) << ce, ci;
-    e[k] = 0.0;
-  }
-  int rows = me;
-  for (int i = 0; i < mi; ++i) {
-    if (lambda_i_[i] > 0.0) J.row(rows++) = J.row(me + i);
-  }
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(J.topRows(rows));
-  lu.setThreshold(1e-10);
-  const Eigen::MatrixXd Z = lu.kernel();
+  const Eigen::MatrixXd Q = FreeMotions();
   st->reduced_hessian_checked = true;
-  if (Z.cols() == 0 || (Z.cols() == 1 && Z.norm() == 0.0)) {  // no free motion: trivially a minimum
+  if (Q.cols() == 0) {  // no free motion: trivially a minimum
     st->reduced_hessian_positive_definite = true;
     st->reduced_hessian_min_eigenvalue = 0.0;
     return;
   }
-  // Orthonormal basis of the free motions, then the reduced Hessian's spectrum.
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(Z);
-  const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(n_, Z.cols());
+  // The reduced Hessian's spectrum over the free motions.
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Q.transpose() * H * Q);
   st->reduced_hessian_min_eigenvalue = eig.eigenvalues().minCoeff();
   st->reduced_hessian_positive_definite =

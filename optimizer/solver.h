@@ -150,6 +150,9 @@ class Solver {
   bool Factorize();
   void SolveStep();
   void SecondOrderCheck(const Eigen::VectorXd& q, SolveStats* st);
+  /// An orthonormal basis (n x k, k ≥ 0) of the motions the active constraints leave free at the
+  /// last Evaluate (offline: dense, allocates).
+  Eigen::MatrixXd FreeMotions() const;
   bool StepWithinTrustRegion() const;
   /// Design mode: the BFGS update of B_ with the step from q_old_ to q and the change of the
   /// design gradient (gd_ − gd_old_).
