@@ -75,49 +75,47 @@ Study::Study(RunSpec run)
   const server::Scene& s = *run_.scene;
   const optimizer::Mechanism& mech = s.mechanism;
   for (const Problem::Entry& e : problem_.equalities()) {  // the unit quaternions
-    equality_names_.push_back({"unit quaternion " + mech.body(e.term->body_a()).name, "quaternion",
-                               e.row, e.term->dim(), -1});
+    equality_names_.push_back(
+        {"unit quaternion " + mech.body(e.term->body_a()).name, Rhs::kNone, e.row, e.term->dim()});
   }
   for (size_t j = 0; j < s.joints.size(); ++j) {
     const server::JointSpec& js = s.joints[j];
     joints_only_.AddEquality(js.term);
     const int k = problem_.AddEquality(js.term);
-    equality_names_.push_back({"joint " + js.name, "joint",
-                               problem_.equalities()[static_cast<size_t>(k)].row, js.term->dim(),
-                               static_cast<int>(j)});
+    equality_names_.push_back({"joint " + js.name, Rhs::kValue,
+                               problem_.equalities()[static_cast<size_t>(k)].row, js.term->dim()});
     if (js.limits) {
       const int l = problem_.AddInequality(js.limits);
-      inequality_names_.push_back({"limit " + js.name, "limit",
-                                   problem_.inequalities()[static_cast<size_t>(l)].row, 2,
-                                   static_cast<int>(j)});
+      inequality_names_.push_back({"limit " + js.name, Rhs::kAngleBounds,
+                                   problem_.inequalities()[static_cast<size_t>(l)].row, 2});
     }
   }
   for (const BoundSpec& b : run_.bounds) {
     const server::JointSpec& js = s.joints[static_cast<size_t>(b.joint)];
     const int l = problem_.AddInequality(optimizer::RevoluteLimits(js.a, js.b, b.lo, b.hi));
-    inequality_names_.push_back({"bound " + js.name, "bound",
-                                 problem_.inequalities()[static_cast<size_t>(l)].row, 2, b.joint});
+    inequality_names_.push_back({"bound " + js.name, Rhs::kAngleBounds,
+                                 problem_.inequalities()[static_cast<size_t>(l)].row, 2});
   }
   // Design joints: free within their bounds in the problem, held still in the mechanism whose
   // mobility the dexterity measures.
   for (const DesignJointSpec& d : run_.design_joints) {
     const server::JointSpec& js = s.joints[static_cast<size_t>(d.joint)];
     const int l = problem_.AddInequality(DesignBounds(d));
-    inequality_names_.push_back({"design " + js.name, d.prismatic ? "design_m" : "bound",
-                                 problem_.inequalities()[static_cast<size_t>(l)].row, 2, d.joint});
+    inequality_names_.push_back({"design " + js.name,
+                                 d.prismatic ? Rhs::kLengthBounds : Rhs::kAngleBounds,
+                                 problem_.inequalities()[static_cast<size_t>(l)].row, 2});
     joints_only_.AddEquality(optimizer::JointCoordinate(js.type, js.a, js.b));
   }
   for (const ConstraintSpec& c : run_.constraints) {
     if (c.inequality) {
       const int k = problem_.AddInequality(c.term);
-      inequality_names_.push_back({c.name, "constraint",
+      inequality_names_.push_back({c.name, Rhs::kValue,
                                    problem_.inequalities()[static_cast<size_t>(k)].row,
-                                   c.term->dim(), -1});
+                                   c.term->dim()});
     } else {
       const int k = problem_.AddEquality(c.term);
-      equality_names_.push_back({c.name, "constraint",
-                                 problem_.equalities()[static_cast<size_t>(k)].row, c.term->dim(),
-                                 -1});
+      equality_names_.push_back(
+          {c.name, Rhs::kValue, problem_.equalities()[static_cast<size_t>(k)].row, c.term->dim()});
     }
   }
   // F = Σ w m is maximized (E = −F) or minimized (E = F).
@@ -203,6 +201,35 @@ std::map<int, double> Study::StartAngles(int index) const {
   return angles;
 }
 
+void Study::AddMechanism(Problem* p, bool bounded) const {
+  const server::Scene& s = *run_.scene;
+  for (const server::JointSpec& js : s.joints) {
+    p->AddEquality(js.term);
+    if (bounded && js.limits) p->AddInequality(js.limits);
+  }
+  if (!bounded) return;
+  for (const BoundSpec& b : run_.bounds) {
+    const server::JointSpec& js = s.joints[static_cast<size_t>(b.joint)];
+    p->AddInequality(optimizer::RevoluteLimits(js.a, js.b, b.lo, b.hi));
+  }
+  for (const DesignJointSpec& d : run_.design_joints) p->AddInequality(DesignBounds(d));
+}
+
+optimizer::SolveStats Study::Settle(const Problem& p, int index, int rounds,
+                                    Eigen::VectorXd* q) const {
+  optimizer::SolverOptions o;
+  o.max_iterations = 200;
+  o.kkt_tolerance = 1e-12;
+  optimizer::Solver solver(p, o);
+  PrepareData(index, *q, &solver.data());
+  optimizer::SolveStats st;
+  for (int round = 0; round < rounds; ++round) {
+    st = solver.Solve(q);
+    if (st.converged && st.iterations <= 1) break;
+  }
+  return st;
+}
+
 Eigen::VectorXd Study::Assemble(int index, const std::map<int, double>& angles, bool* ok,
                                 bool* feasible) const {
   // The joints at the start angles: minimize Σ (θ_j − target_j)² subject to the scene's joints,
@@ -214,16 +241,8 @@ Eigen::VectorXd Study::Assemble(int index, const std::map<int, double>& angles, 
   const server::Scene& s = *run_.scene;
   auto solve = [&](bool constrained, Eigen::VectorXd* q) {
     Problem p(s.mechanism);
-    for (const server::JointSpec& js : s.joints) {
-      p.AddEquality(js.term);
-      if (constrained && js.limits) p.AddInequality(js.limits);
-    }
+    AddMechanism(&p, constrained);
     if (constrained) {
-      for (const BoundSpec& b : run_.bounds) {
-        const server::JointSpec& js = s.joints[static_cast<size_t>(b.joint)];
-        p.AddInequality(optimizer::RevoluteLimits(js.a, js.b, b.lo, b.hi));
-      }
-      for (const DesignJointSpec& d : run_.design_joints) p.AddInequality(DesignBounds(d));
       for (const ConstraintSpec& c : run_.constraints) {
         if (c.inequality) {
           p.AddInequality(c.term);
@@ -241,18 +260,9 @@ Eigen::VectorXd Study::Assemble(int index, const std::map<int, double>& angles, 
                      1.0);
     }
     p.set_least_astonishment(1e-9);
-    optimizer::SolverOptions o;
-    o.max_iterations = 200;
-    o.kkt_tolerance = 1e-12;
-    optimizer::Solver solver(p, o);
-    if (constrained) PrepareData(index, *q, &solver.data());
-    optimizer::SolveStats st;
     // (Fewer rounds with the run's constraints: a set that cannot be met is diagnosed by
     // ReportInfeasible, not by trying longer.)
-    for (int round = 0; round < (constrained ? 4 : 20); ++round) {
-      st = solver.Solve(q);
-      if (st.converged && st.iterations <= 1) break;
-    }
+    const optimizer::SolveStats st = Settle(p, index, constrained ? 4 : 20, q);
     return st.max_violation <= 1e-9 && q->allFinite();
   };
   Eigen::VectorXd q = s.mechanism.InitialCoordinates();
@@ -385,7 +395,7 @@ CaseResult Study::Solve(int index) const {
   const Eigen::VectorXd& le = solver.equality_multipliers();
   const Eigen::VectorXd& li = solver.inequality_multipliers();
   for (const RowName& n : equality_names_) {
-    if (n.kind == "quaternion") continue;
+    if (n.rhs == Rhs::kNone) continue;
     for (int k = 0; k < n.dim; ++k) {
       const double l = le[n.first_row + k];
       r.sensitivities.push_back({n.constraint, k, "rhs", l, sign_ * l, true});
@@ -394,9 +404,9 @@ CaseResult Study::Solve(int index) const {
   for (const RowName& n : inequality_names_) {
     for (int k = 0; k < n.dim; ++k) {
       const double l = li[n.first_row + k];
-      if (n.kind == "constraint") {
+      if (n.rhs == Rhs::kValue) {
         r.sensitivities.push_back({n.constraint, k, "rhs", l, sign_ * l, l > 0.0});
-      } else if (n.kind == "design_m") {  // d − lo ≥ 0, hi − d ≥ 0; per metre
+      } else if (n.rhs == Rhs::kLengthBounds) {  // d − lo ≥ 0, hi − d ≥ 0; per metre
         r.sensitivities.push_back({n.constraint, k, k == 0 ? "min" : "max", l,
                                    (k == 0 ? 1.0 : -1.0) * sign_ * l, l > 0.0});
       } else {  // θ − lo ≥ 0 (row 0), hi − θ ≥ 0 (row 1); per degree
@@ -443,17 +453,8 @@ bool Study::ReportInfeasible(int index, CaseResult* r) const {
   // The least-violation point with the mechanism intact: the scene's joints, limits and the
   // run's bounds and inequalities hard, the run's equalities as least squares ½ Σ |r − rhs|².
   // Those left unmet there are what cannot be had together with the mechanism.
-  const server::Scene& s = *run_.scene;
-  Problem p(s.mechanism);
-  for (const server::JointSpec& js : s.joints) {
-    p.AddEquality(js.term);
-    if (js.limits) p.AddInequality(js.limits);
-  }
-  for (const BoundSpec& b : run_.bounds) {
-    const server::JointSpec& js = s.joints[static_cast<size_t>(b.joint)];
-    p.AddInequality(optimizer::RevoluteLimits(js.a, js.b, b.lo, b.hi));
-  }
-  for (const DesignJointSpec& d : run_.design_joints) p.AddInequality(DesignBounds(d));
+  Problem p(run_.scene->mechanism);
+  AddMechanism(&p, true);
   std::vector<int> soft;
   for (size_t k = 0; k < run_.constraints.size(); ++k) {
     const ConstraintSpec& c = run_.constraints[k];
@@ -465,20 +466,11 @@ bool Study::ReportInfeasible(int index, CaseResult* r) const {
     }
   }
   p.set_least_astonishment(1e-9);
-  optimizer::SolverOptions o;
-  o.max_iterations = 200;
-  o.kkt_tolerance = 1e-12;
-  optimizer::Solver solver(p, o);
-  PrepareData(index, r->q, &solver.data());
-  Eigen::VectorXd q = r->q;
   bool assembled = false;
   const Eigen::VectorXd start = Assemble(index, {}, &assembled, nullptr);
-  if (assembled) q = start;  // (from the scene's pose: the diverged iterate may be far off)
-  optimizer::SolveStats st;
-  for (int round = 0; round < 20; ++round) {
-    st = solver.Solve(&q);
-    if (st.converged && st.iterations <= 1) break;
-  }
+  // (From the scene's pose: the diverged iterate may be far off.)
+  Eigen::VectorXd q = assembled ? start : r->q;
+  const optimizer::SolveStats st = Settle(p, index, 20, &q);
   if (!(st.max_violation <= 1e-9)) return false;  // the hard set itself conflicts
   optimizer::ProblemEvaluator ev(p, false);
   ev.Evaluate(q);

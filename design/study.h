@@ -86,15 +86,26 @@ class Study {
   nlohmann::json Geometry(const Eigen::VectorXd& q) const;
 
  private:
+  /// What a row's multiplier is the sensitivity to: nothing reported (unit quaternions), the
+  /// right-hand side b of r(q) = b or ≥ b, or a two-row bound [lo, hi] on an angle (per
+  /// degree) or a length (per metre).
+  enum class Rhs { kNone, kValue, kAngleBounds, kLengthBounds };
   struct RowName {
     std::string constraint;
-    std::string kind;  ///< "joint", "constraint", "bound", "limit", "quaternion"
+    Rhs rhs = Rhs::kValue;
     int first_row = 0, dim = 0;
-    int joint = -1;  ///< bounds and limits: the joint
   };
   /// The start of case `index`: the scene's joints at `angles` (*ok), then the run's
   /// constraints and bounds met too where they can be (*feasible, may be null).
   optimizer::TermPtr DesignBounds(const DesignJointSpec& d) const;
+  /// Adds the scene's joints to p and, with `bounded`, their limits, the run's bounds and the
+  /// design joints' bounds.
+  void AddMechanism(optimizer::Problem* p, bool bounded) const;
+  /// Solves p from *q by repeated warm solves (each anchored at its start) until one takes at
+  /// most an iteration, for at most `rounds`; the run's constraints in p get case `index`'s
+  /// right-hand sides and seeds. @return the last solve's stats.
+  optimizer::SolveStats Settle(const optimizer::Problem& p, int index, int rounds,
+                               Eigen::VectorXd* q) const;
   Eigen::VectorXd Assemble(int index, const std::map<int, double>& angles, bool* ok,
                            bool* feasible) const;
   /// Finds the least-violation point with the mechanism intact; when the run's equality
