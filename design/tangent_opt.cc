@@ -126,7 +126,11 @@ int main(int argc, char** argv) {
   }
   if (output.empty()) {
     std::filesystem::path p(run_path);
-    output = (p.parent_path() / (p.stem().string() + ".result.json")).string();
+    // x.run.json (the examples' naming) or x.json -> x.result.json, beside the run file.
+    std::string stem = p.stem().string();
+    if (stem.size() > 4 && stem.compare(stem.size() - 4, 4, ".run") == 0)
+      stem.resize(stem.size() - 4);
+    output = (p.parent_path() / (stem + ".result.json")).string();
   }
   int status = 0;
   try {
