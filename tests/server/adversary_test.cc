@@ -46,6 +46,7 @@ namespace {
 std::string g_tangentd, g_scene;
 constexpr const char* kUrl = "udpm://239.255.76.68:7668?ttl=0";
 constexpr int64_t kDevice = 1;
+constexpr double kDeviceTimeout = 0.1;  ///< s: ServoOptions::device_timeout, tangentd's default
 
 int64_t NowNs() {
   timespec t;
@@ -173,9 +174,22 @@ class Harness {
     m.buttons = 1;
     return m;
   }
-  void Publish(const tangent::device_state_t& m) { lcm_->publish("TANGENT_DEVICE", &m); }
+  void Publish(const tangent::device_state_t& m) {
+    NoteSend();
+    lcm_->publish("TANGENT_DEVICE", &m);
+  }
   void PublishRaw(const void* data, size_t n) {
+    NoteSend();
     lcm_->publish("TANGENT_DEVICE", data, static_cast<unsigned>(n));
+  }
+  /// The longest pause between two messages this client sent since ResetGap(): a pause of the
+  /// client itself (this process descheduled on a busy machine). A pause longer than the
+  /// server's device timeout must be answered by a timeout; the tests that expect none check
+  /// that the client did not pause for half of it.
+  int64_t max_gap_ns() const { return max_gap_ns_; }
+  void ResetGap() {
+    max_gap_ns_ = 0;
+    last_send_ns_ = NowNs();
   }
   /// Calls tick(k) at `rate_hz` for `seconds` (sleep then spin to each deadline).
   int64_t Drive(double seconds, double rate_hz, const std::function<void(int64_t)>& tick) {
@@ -296,6 +310,12 @@ class Harness {
   std::unique_ptr<lcm::LCM> lcm_;
   std::unique_ptr<tangent::server::LcmSubscriptions> subs_;
   std::thread rx_;
+  int64_t last_send_ns_ = 0, max_gap_ns_ = 0;  // (the test thread's only)
+  void NoteSend() {
+    const int64_t now = NowNs();
+    if (last_send_ns_ > 0) max_gap_ns_ = std::max(max_gap_ns_, now - last_send_ns_);
+    last_send_ns_ = now;
+  }
   std::atomic<bool> stop_{false};
   std::mutex mutex_;
   std::vector<Received> wrenches_;
@@ -329,7 +349,9 @@ class ServerEnvironment : public ::testing::Environment {
 struct Delta {
   int64_t accepted, sessions, undecodable, wrong_type, lost, non_finite, quaternion, workspace,
       device, session, sequence, jump, timeouts, faults, unanswered, wrenches;
-  int64_t sent = 0;  ///< states of the served session sent between the two snapshots
+  int64_t sent = 0;              ///< states of the served session sent between the two snapshots
+  double client_pause_ms = 0.0;  ///< the client's longest pause between sends (Harness)
+  int64_t timeout_wrenches = 0;  ///< timeout wrenches (state 2) received over the attack
   static Delta Of(const tangent::loop_stats_t& a, const tangent::loop_stats_t& b) {
     return {b.device_messages - a.device_messages,
             b.sessions - a.sessions,
@@ -369,6 +391,7 @@ Delta Attack(const char* what, const std::function<void()>& attack, double settl
   const int64_t served = h.session;
   const int64_t sent_before = h.sent(served);
   const size_t from = h.WrenchCount();
+  h.ResetGap();
   attack();
   const int64_t settle_start = NowNs();
   h.Hold(h.session, settle_s);
@@ -387,7 +410,13 @@ Delta Attack(const char* what, const std::function<void()>& attack, double settl
   EXPECT_EQ(after.faults, 0) << what << ": the filter let a state through that broke a tick";
   Delta d = Delta::Of(before, after);
   d.sent = sent_after - sent_before;
+  d.client_pause_ms = 1e-6 * static_cast<double>(h.max_gap_ns());
+  for (const Received& r : h.WrenchesSince(from)) d.timeout_wrenches += r.w.state == 2;
   d.Print(what);
+  if (d.timeouts > 0) {
+    std::printf("[%s] the client itself paused up to %.1f ms (%lld timeout wrenches received)\n",
+                what, d.client_pause_ms, static_cast<long long>(d.timeout_wrenches));
+  }
   return d;
 }
 
@@ -405,7 +434,12 @@ void ExpectOnly(const Delta& d, int64_t non_finite, int64_t quaternion, int64_t 
   if (!may_lose) {
     EXPECT_EQ(d.lost, 0);
   }
-  EXPECT_EQ(d.timeouts, 0);
+  // No device timeout while the client kept sending. A client descheduled for half the
+  // timeout or more (a busy machine: CI saw one such pause) may leave the server silent for
+  // the whole timeout, and then a timeout, its force ramped to zero, is the right answer.
+  if (d.client_pause_ms < 0.5 * 1e3 * kDeviceTimeout) {
+    EXPECT_EQ(d.timeouts, 0) << "with the client's longest pause " << d.client_pause_ms << " ms";
+  }
 }
 
 /// For 1 s at 1 kHz, every `every`-th state of the served client is corrupted by `corrupt(k, m)`
@@ -756,7 +790,9 @@ void Flood(double rate_hz, const char* what) {
       static_cast<long long>(d.lost), static_cast<long long>(d.wrenches),
       static_cast<long long>(d.unanswered));
   EXPECT_NEAR(static_cast<double>(d.accepted + d.lost), static_cast<double>(sent), 10.0);
-  EXPECT_NEAR(static_cast<double>(d.wrenches + d.unanswered), static_cast<double>(d.accepted), 2.0);
+  // (Timeout wrenches answer no state: not counted.)
+  EXPECT_NEAR(static_cast<double>(d.wrenches - d.timeout_wrenches + d.unanswered),
+              static_cast<double>(d.accepted), 2.0);
   EXPECT_GT(d.wrenches, 4000);  // still serving through the flood
   ExpectOnly(d, 0, 0, 0, 0, 0, /*may_lose=*/true);
 }
