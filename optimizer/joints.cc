@@ -507,6 +507,17 @@ double PrismaticDisplacement(const Attachment& a, const Attachment& b,
       .dot(PoseOf(poses, an.body).R_WB * an.axis);
 }
 
+TermPtr MakeJoint(const std::string& type, const Attachment& a, const Attachment& b) {
+  if (type == "spherical") return SphericalJoint(a, b);
+  if (type == "revolute") return RevoluteJoint(a, b);
+  if (type == "universal") return UniversalJoint(a, b);
+  if (type == "cylindrical") return CylindricalJoint(a, b);
+  if (type == "prismatic") return PrismaticJoint(a, b);
+  if (type == "fixed") return FixedJoint(a, b);
+  throw std::invalid_argument("unknown joint type \"" + type +
+                              "\" (spherical, revolute, universal, cylindrical, prismatic, fixed)");
+}
+
 TermPtr SphericalJoint(const Attachment& a, const Attachment& b) {
   return std::make_shared<Joint>(Kind::kSpherical, "spherical", a, b);
 }

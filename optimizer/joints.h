@@ -28,6 +28,9 @@ TermPtr CylindricalJoint(const Attachment& a, const Attachment& b);
 TermPtr PrismaticJoint(const Attachment& a, const Attachment& b);
 /// Fixed (weld): points coincide, axes parallel, references parallel (3 + 2 + 1 rows).
 TermPtr FixedJoint(const Attachment& a, const Attachment& b);
+/// The joint of a type named as in scene files: spherical, revolute, universal, cylindrical,
+/// prismatic or fixed. @throws std::invalid_argument for another name.
+TermPtr MakeJoint(const std::string& type, const Attachment& a, const Attachment& b);
 /// |Q|² − 1 = 0 for a moving body (1 row).
 TermPtr UnitQuaternion(int body);
 /// Revolute joint limits as two inequalities θ − lo ≥ 0 and hi − θ ≥ 0, θ the angle of b's

@@ -221,27 +221,18 @@ void ParseJoints(const Node& root, double unit, Scene* out) {
       js.a = a;
       js.b = b;
       if (a.body == b.body) n.Fail("joins a body to itself");
-      if (js.type == "spherical") {
-        js.term = optimizer::SphericalJoint(a, b);
-      } else if (js.type == "revolute") {
-        js.term = optimizer::RevoluteJoint(a, b);
-      } else if (js.type == "universal") {
-        js.term = optimizer::UniversalJoint(a, b);
-      } else if (js.type == "cylindrical") {
-        js.term = optimizer::CylindricalJoint(a, b);
-      } else if (js.type == "prismatic") {
-        js.term = optimizer::PrismaticJoint(a, b);
-      } else if (js.type == "fixed") {
-        js.term = optimizer::FixedJoint(a, b);
-      } else {
-        n.At("type").Fail("unknown joint type \"" + js.type +
-                          "\" (spherical, revolute, universal, cylindrical, prismatic, fixed)");
+      try {
+        js.term = optimizer::MakeJoint(js.type, a, b);
+      } catch (const std::invalid_argument& e) {
+        n.At("type").Fail(e.what());
       }
       if (n.Has("limits_deg")) {
         if (js.type != "revolute") n.At("limits_deg").Fail("limits apply to revolute joints only");
         const Eigen::Vector2d l = n.At("limits_deg").Vector<2>() * std::numbers::pi / 180.0;
         if (!(l[0] < l[1])) n.At("limits_deg").Fail("lower limit must be below the upper");
         js.limits = optimizer::RevoluteLimits(a, b, l[0], l[1]);
+        js.limit_lo = l[0];
+        js.limit_hi = l[1];
       }
       s.joints.push_back(std::move(js));
     }

@@ -48,7 +48,8 @@ struct JointSpec {
   std::string type;  ///< spherical, revolute, universal, cylindrical, prismatic, fixed
   optimizer::Attachment a, b;
   optimizer::TermPtr term;
-  optimizer::TermPtr limits;  ///< revolute limits (may be null)
+  optimizer::TermPtr limits;              ///< revolute limits (may be null)
+  double limit_lo = 0.0, limit_hi = 0.0;  ///< the limits' range, rad (when limits is set)
 };
 
 struct ObjectiveSpec {
