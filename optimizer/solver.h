@@ -153,6 +153,12 @@ class Solver {
   /// An orthonormal basis (n x k, k ≥ 0) of the motions the active constraints leave free at the
   /// last Evaluate (offline: dense, allocates).
   Eigen::MatrixXd FreeMotions() const;
+  /// The constraints' Jacobian at the last Evaluate, dense: equality rows, then inequality rows
+  /// (offline: allocates).
+  Eigen::MatrixXd DenseConstraintJacobian() const;
+  /// Design mode, a cold start: the multipliers that best balance ∇E at q (least squares over
+  /// the equalities and the inequalities at their bound, those with λ < 0 dropped).
+  void LeastSquaresMultipliers();
   bool StepWithinTrustRegion() const;
   /// Design mode: the BFGS update of B_ with the step from q_old_ to q and the change of the
   /// design gradient (gd_ − gd_old_).
