@@ -98,12 +98,13 @@ int main(int argc, char** argv) {
   }
   std::printf("Design solves against IPOPT (same process, same starts; median of %d reps):\n",
               reps);
-  std::printf("%-28s %6s %8s %8s %6s %10s %10s %8s\n", "run", "cases", "ours ok", "ipopt ok",
+  std::printf("%-36s %6s %8s %8s %6s %10s %10s %8s\n", "run", "cases", "ours ok", "ipopt ok",
               "same", "ours ms", "ipopt ms", "ratio");
-  for (const char* run : {"three_link_finger.run.json", "fourbar_dexterity.run.json",
-                          "three_link_finger_design.run.json"}) {
+  for (const char* run :
+       {"three_link_finger.run.json", "fourbar_dexterity.run.json",
+        "three_link_finger_design.run.json", "fourbar_force_transmission.run.json"}) {
     const Row r = Compare(scenes + "/" + run, reps);
-    std::printf("%-28s %6d %8d %8d %6d %10.2f %10.2f %7.2fx\n", r.run.c_str(), r.cases,
+    std::printf("%-36s %6d %8d %8d %6d %10.2f %10.2f %7.2fx\n", r.run.c_str(), r.cases,
                 r.ours_optima, r.ipopt_solved, r.same, r.ours_ms, r.ipopt_ms,
                 r.ipopt_ms / std::max(r.ours_ms, 1e-9));
   }

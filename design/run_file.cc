@@ -1,5 +1,7 @@
 #include "design/run_file.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -191,6 +193,32 @@ void ParseBounds(const Node& n, RunSpec* run) {
   }
 }
 
+// A list of values: "values": [a, b, …] or "range": [first, last, count], times `scale`.
+std::vector<double> ValuesOrRange(const Node& g, const char* values, const char* range,
+                                  double scale) {
+  if (g.Has(values) == g.Has(range)) {
+    g.Fail(std::string("give either \"") + values + "\" or \"" + range + "\"");
+  }
+  std::vector<double> out;
+  if (g.Has(values)) {
+    const Node v = g.At(values);
+    for (size_t k = 0; k < v.Size(); ++k) out.push_back(scale * v.At(k).Number());
+  } else {
+    const Node r = g.At(range);
+    if (r.Size() != 3) r.Fail("must be [first, last, count]");
+    const double lo = scale * r.At(0).Number(), hi = scale * r.At(1).Number();
+    const Node count = r.At(2);
+    if (!count.j.is_number_integer() || count.j.get<long long>() < 2 ||
+        count.j.get<long long>() > 10000) {
+      count.Fail("the count must be an integer in [2, 10000]");
+    }
+    const int m = static_cast<int>(count.j.get<long long>());
+    if (!(lo < hi)) r.Fail("empty or inverted range: first must be below last");
+    for (int k = 0; k < m; ++k) out.push_back(lo + (hi - lo) * k / (m - 1));
+  }
+  return out;
+}
+
 void ParseGrid(const Node& n, double unit, RunSpec* run) {
   for (size_t i = 0; i < n.Size(); ++i) {
     const Node g = n.At(i);
@@ -209,25 +237,7 @@ void ParseGrid(const Node& n, double unit, RunSpec* run) {
         g.Fail("this constraint row is already an axis");
       }
     }
-    if (g.Has("values") == g.Has("range")) g.Fail("give either \"values\" or \"range\"");
-    if (g.Has("values")) {
-      const Node v = g.At("values");
-      for (size_t k = 0; k < v.Size(); ++k) {
-        axis.values.push_back(unit * v.At(k).Number());
-      }
-    } else {
-      const Node r = g.At("range");
-      if (r.Size() != 3) r.Fail("must be [first, last, count]");
-      const double lo = unit * r.At(0).Number(), hi = unit * r.At(1).Number();
-      const Node count = r.At(2);
-      if (!count.j.is_number_integer() || count.j.get<long long>() < 2 ||
-          count.j.get<long long>() > 10000) {
-        count.Fail("the count must be an integer in [2, 10000]");
-      }
-      const int m = static_cast<int>(count.j.get<long long>());
-      if (!(lo < hi)) r.Fail("empty or inverted range: first must be below last");
-      for (int k = 0; k < m; ++k) axis.values.push_back(lo + (hi - lo) * k / (m - 1));
-    }
+    axis.values = ValuesOrRange(g, "values", "range", unit);
     if (axis.values.empty()) g.Fail("no values");
     run->grid.push_back(std::move(axis));
   }
@@ -321,6 +331,129 @@ void ParseStarts(const Node& n, double unit, RunSpec* run) {
   if (run->num_starts() == 0) n.Fail("no start: give \"list\" or \"random\" > 0");
 }
 
+// The configurations (configurations.h): parsed against the scene as written, then the scene
+// is replaced by its replica and every joint index of the run moved to the replica's.
+void ParseConfigurations(const Node& root, double unit, RunSpec* run) {
+  const Node n = root.At("configurations");
+  n.OnlyKeys({"joint", "values_deg", "range_deg", "values", "range", "tolerance"});
+  auto c = std::make_unique<ConfigurationsSpec>();
+  const server::Scene& base = *run->scene;
+  c->joint = JointNamed(n.At("joint"), n.At("joint").String(), base, true, true);
+  const server::JointSpec& cj = base.joints[static_cast<size_t>(c->joint)];
+  c->prismatic = cj.type == "prismatic";
+  if (c->prismatic) {
+    if (n.Has("values_deg") || n.Has("range_deg")) {
+      n.Fail("a prismatic joint's configurations are lengths: \"values\" or \"range\"");
+    }
+    c->values = ValuesOrRange(n, "values", "range", unit);
+  } else {
+    if (n.Has("values") || n.Has("range")) {
+      n.Fail("a revolute joint's configurations are angles: \"values_deg\" or \"range_deg\"");
+    }
+    c->values = ValuesOrRange(n, "values_deg", "range_deg", kDeg);
+    for (double v : c->values) {
+      if (std::abs(v) > std::numbers::pi + 1e-12) n.Fail("angles must lie within [-180, 180]");
+    }
+  }
+  if (c->values.empty() || c->values.size() > 1000) n.Fail("give 1 to 1000 configurations");
+  if (!n.Has("tolerance")) {
+    n.Fail(
+        "give \"tolerance\": how far the smooth worst case may lie from the exact one, in "
+        "the measure's units");
+  }
+  c->tolerance = n.Positive("tolerance", 0.0);
+  // What the copies cannot carry yet, and what the configurations set themselves.
+  if (root.Has("constraints")) {
+    root.At("constraints")
+        .Fail(
+            "cannot be combined with \"configurations\" yet (each "
+            "constraint would need a copy per configuration)");
+  }
+  for (size_t i = 0; i < run->terms.size(); ++i) {
+    if (run->terms[i].measure == "grasp_distance") {
+      root.At("objective")
+          .At("terms")
+          .At(i)
+          .At("measure")
+          .Fail(
+              "grasp_distance cannot be combined with \"configurations\" (a worst case over "
+              "configurations is of dexterity measures)");
+    }
+  }
+  for (const DesignJointSpec& d : run->design_joints) {
+    if (d.joint == c->joint) n.At("joint").Fail("a design joint cannot be the configuration joint");
+    c->design_joints.push_back(d.joint);
+  }
+  for (const BoundSpec& b : run->bounds) {
+    if (b.joint == c->joint) n.At("joint").Fail("is bounded too: the configurations set it");
+  }
+  for (size_t i = 0; i < run->starts.size(); ++i) {
+    if (run->starts[i].angles.count(c->joint)) {
+      root.At("starts").At("list").At(i).Fail("sets the configuration joint \"" + cj.name +
+                                              "\": the configurations do");
+    }
+  }
+  const auto random = std::find(run->random_joints.begin(), run->random_joints.end(), c->joint);
+  if (random != run->random_joints.end()) {
+    if (root.At("starts").Has("joints")) {
+      root.At("starts").At("joints").Fail("names the configuration joint \"" + cj.name +
+                                          "\": the configurations set it");
+    }
+    run->random_joints.erase(random);
+  }
+
+  c->base = std::move(run->scene);
+  try {
+    run->scene = Replicate(c.get());
+  } catch (const std::invalid_argument& e) {
+    n.Fail(e.what());
+  }
+  // Every joint index to the replica's: one per copy (a shared joint once).
+  const int K = c->size();
+  auto copies = [&](int j) {
+    std::vector<int> out;
+    for (int k = 0; k < K; ++k) {
+      const int r = c->Joint(k, j);
+      if (std::find(out.begin(), out.end(), r) == out.end()) out.push_back(r);
+    }
+    return out;
+  };
+  std::vector<BoundSpec> bounds;
+  for (const BoundSpec& b : run->bounds) {
+    for (int r : copies(b.joint)) bounds.push_back({r, b.lo, b.hi});
+  }
+  run->bounds = bounds;
+  for (DesignJointSpec& d : run->design_joints) d.joint = copies(d.joint).front();
+  for (StartSpec& st : run->starts) {
+    std::map<int, double> angles;
+    for (const auto& [j, value] : st.angles) {
+      for (int r : copies(j)) angles[r] = value;
+    }
+    st.angles = angles;
+  }
+  std::vector<int> random_joints;
+  for (int j : run->random_joints) {
+    for (int r : copies(j)) random_joints.push_back(r);
+  }
+  run->random_joints = random_joints;
+  // Copy k's configuration joint at its value: an equality whose multiplier is dF*/dθ_k.
+  for (int k = 0; k < K; ++k) {
+    const server::JointSpec& js = run->scene->joints[static_cast<size_t>(c->Joint(k, c->joint))];
+    ConstraintSpec cs;
+    const double v = c->values[static_cast<size_t>(k)];
+    char value[64];
+    std::snprintf(value, sizeof value, c->prismatic ? "%.6g m" : "%.6g deg",
+                  c->prismatic ? v : v / kDeg);
+    cs.name = "configuration " + std::to_string(k + 1) + ": " + cj.name + " at " + value;
+    cs.type = "configuration";
+    cs.inner = optimizer::JointCoordinate(js.type, js.a, js.b);
+    cs.rhs = Eigen::VectorXd::Constant(1, v);
+    cs.term = optimizer::Shifted(cs.inner, cs.rhs);
+    run->constraints.push_back(std::move(cs));
+  }
+  run->configurations = std::move(c);
+}
+
 }  // namespace
 
 RunSpec ParseRun(const std::string& text, const std::string& where, const std::string& base_dir) {
@@ -332,7 +465,7 @@ RunSpec ParseRun(const std::string& text, const std::string& where, const std::s
   }
   const Node root{j, where, "", Node::Style::kPointer};
   root.OnlyKeys({"comment", "scene", "length_unit", "objective", "constraints", "bounds", "design",
-                 "grid", "starts", "solver"});
+                 "grid", "starts", "configurations", "solver"});
   RunSpec run;
   run.path = where;
   const std::string scene = root.At("scene").String();
@@ -355,6 +488,7 @@ RunSpec ParseRun(const std::string& text, const std::string& where, const std::s
   if (root.Has("design")) ParseDesignJoints(root.At("design"), unit, &run);
   if (root.Has("grid")) ParseGrid(root.At("grid"), unit, &run);
   ParseStarts(root.At("starts"), unit, &run);
+  if (root.Has("configurations")) ParseConfigurations(root, unit, &run);
   if (root.Has("solver")) {
     const Node sv = root.At("solver");
     sv.OnlyKeys({"max_iterations", "relative_kkt_tolerance", "constraint_tolerance"});

@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 
+#include "design/configurations.h"
 #include "optimizer/joints.h"
 #include "optimizer/term.h"
 #include "server/scene.h"
@@ -96,6 +97,11 @@ struct RunSpec {
   uint64_t seed = 1;
   std::vector<int> random_joints;
   std::vector<GridAxis> grid;  ///< empty: one point (the constraints' own rhs)
+  /// Design over a range of motion (configurations.h), or null. When set, `scene` is the
+  /// replica (K copies of the moving bodies) and every joint index above is the replica's,
+  /// except the measures' (`terms`: end effector and joints index the base scene, the measure
+  /// being taken on each copy); the configurations' equalities are the first constraints.
+  std::unique_ptr<ConfigurationsSpec> configurations;
   int max_iterations = 500;
   double relative_kkt_tolerance = 1e-9;
   double constraint_tolerance = 1e-12;

@@ -118,8 +118,22 @@ Study::Study(RunSpec run)
           {c.name, Rhs::kValue, problem_.equalities()[static_cast<size_t>(k)].row, c.term->dim()});
     }
   }
-  // F = Σ w m is maximized (E = −F) or minimized (E = F).
+  // F = Σ w m is maximized (E = −F) or minimized (E = F). With configurations each measure is
+  // the base scene's, on one copy, and F the worst case over the copies.
   sign_ = run_.maximize ? -1.0 : 1.0;
+  const ConfigurationsSpec* configurations = run_.configurations.get();
+  if (configurations) {
+    const server::Scene& base = *configurations->base;
+    base_joints_ = std::make_unique<Problem>(base.mechanism);
+    for (const server::JointSpec& js : base.joints) base_joints_->AddEquality(js.term);
+    for (int j : configurations->design_joints) {
+      const server::JointSpec& js = base.joints[static_cast<size_t>(j)];
+      base_joints_->AddEquality(optimizer::JointCoordinate(js.type, js.a, js.b));
+    }
+  }
+  const Problem& measured = configurations ? *base_joints_ : joints_only_;
+  const server::Scene& measured_scene = configurations ? *configurations->base : s;
+  WorstCase::Terms per_copy;
   for (const MeasureSpec& m : run_.terms) {
     if (m.measure == "grasp_distance") {
       auto goal = optimizer::MakePositionGoal(m.end_effector, m.target);
@@ -131,19 +145,30 @@ Study::Study(RunSpec run)
     }
     std::vector<std::pair<optimizer::Attachment, optimizer::Attachment>> joints;
     for (int j : m.joints) {
-      joints.emplace_back(s.joints[static_cast<size_t>(j)].a, s.joints[static_cast<size_t>(j)].b);
+      const server::JointSpec& js = measured_scene.joints[static_cast<size_t>(j)];
+      joints.emplace_back(js.a, js.b);
     }
-    auto d = std::make_shared<optimizer::Dexterity>(joints_only_, m.end_effector, joints);
+    auto d = std::make_shared<optimizer::Dexterity>(measured, m.end_effector, joints);
     std::shared_ptr<const DesignObjective> f =
         optimizer::MakeDexterityObjective(d, MeasureOf(m.measure));
     const double c = run_.maximize ? m.weight : -m.weight;  // E −= c f
-    if (c > 0.0) {
+    if (configurations) {
+      per_copy.emplace_back(f, m.weight);
+    } else if (c > 0.0) {
       problem_.AddDesignObjective(f, c);
     } else {
       problem_.AddDesignObjective(std::make_shared<Negated>(f), -c);
     }
     dexterity_.push_back(d);
     distance_terms_.push_back(nullptr);
+  }
+  if (configurations) {
+    worst_ = std::make_shared<WorstCase>(per_copy, configurations, run_.maximize);
+    if (run_.maximize) {
+      problem_.AddDesignObjective(worst_, 1.0);
+    } else {
+      problem_.AddDesignObjective(std::make_shared<Negated>(worst_), 1.0);
+    }
   }
   problem_.set_least_astonishment(0.0);
 }
@@ -156,6 +181,23 @@ optimizer::TermPtr Study::DesignBounds(const DesignJointSpec& d) const {
 
 double Study::Objective(const Eigen::VectorXd& q,
                         std::vector<std::pair<std::string, double>>* measures) const {
+  if (worst_) {  // each copy's measures, the exact worst case, and F its smooth aggregate
+    const ConfigurationsSpec& c = *run_.configurations;
+    Eigen::VectorXd F = Eigen::VectorXd::Zero(c.size());
+    for (int k = 0; k < c.size(); ++k) {
+      const Eigen::VectorXd q_k = c.Gather(k, q);
+      for (size_t i = 0; i < run_.terms.size(); ++i) {
+        const MeasureSpec& m = run_.terms[i];
+        const double value = Measure(dexterity_[i]->Evaluate(q_k, false), m.measure);
+        F[k] += m.weight * value;
+        if (measures) measures->emplace_back(m.measure + "@" + std::to_string(k + 1), value);
+      }
+    }
+    if (measures) {
+      measures->emplace_back("worst case", run_.maximize ? F.minCoeff() : F.maxCoeff());
+    }
+    return worst_->Aggregate(F);
+  }
   std::vector<contact::BodyPose> poses;
   run_.scene->mechanism.Poses(q, &poses);
   double f = 0.0;
@@ -177,7 +219,9 @@ double Study::Objective(const Eigen::VectorXd& q,
 std::map<int, double> Study::StartAngles(int index) const {
   const int start = index % run_.num_starts();
   if (start < static_cast<int>(run_.starts.size())) {
-    return run_.starts[static_cast<size_t>(start)].angles;
+    std::map<int, double> angles = run_.starts[static_cast<size_t>(start)].angles;
+    AddConfigurations(&angles);
+    return angles;
   }
   // Seeded by (seed, start index) alone: the same angles on any thread or rank, and at every
   // grid point.
@@ -198,7 +242,16 @@ std::map<int, double> Study::StartAngles(int index) const {
     const double t = static_cast<double>(gen() >> 11) * 0x1.0p-53;
     angles[j] = lo + (hi - lo) * t;
   }
+  AddConfigurations(&angles);
   return angles;
+}
+
+void Study::AddConfigurations(std::map<int, double>* angles) const {
+  if (!run_.configurations) return;
+  const ConfigurationsSpec& c = *run_.configurations;
+  for (int k = 0; k < c.size(); ++k) {
+    (*angles)[c.Joint(k, c.joint)] = c.values[static_cast<size_t>(k)];
+  }
 }
 
 void Study::AddMechanism(Problem* p, bool bounded) const {
@@ -561,7 +614,28 @@ nlohmann::json Study::Geometry(const Eigen::VectorXd& q) const {
     add(js.a);
     add(js.b);
   }
-  for (const MeasureSpec& m : run_.terms) add(m.end_effector);
+  // Each term's end effector (on every copy, with configurations) and the coordinates its
+  // measure is taken at.
+  struct Effector {
+    size_t term;
+    optimizer::Attachment at;
+    Eigen::VectorXd q;
+  };
+  std::vector<Effector> effectors_at;
+  for (size_t k = 0; k < run_.terms.size(); ++k) {
+    const optimizer::Attachment& ee = run_.terms[k].end_effector;
+    if (!run_.configurations) {
+      effectors_at.push_back({k, ee, q});
+      continue;
+    }
+    const ConfigurationsSpec& c = *run_.configurations;
+    for (int copy = 0; copy < c.size(); ++copy) {
+      optimizer::Attachment at = ee;
+      at.body = c.Body(copy, ee.body);
+      effectors_at.push_back({k, at, c.Gather(copy, q)});
+    }
+  }
+  for (const Effector& e : effectors_at) add(e.at);
   nlohmann::json bodies = nlohmann::json::array();
   for (int b = 0; b < s.mechanism.num_bodies(); ++b) {
     nlohmann::json pts = nlohmann::json::array();
@@ -595,14 +669,14 @@ nlohmann::json Study::Geometry(const Eigen::VectorXd& q) const {
     surfaces.push_back({{"name", ss.name}, {"x", x}, {"y", y}, {"z", z}});
   }
   nlohmann::json effectors = nlohmann::json::array();
-  for (size_t k = 0; k < run_.terms.size(); ++k) {
+  for (const Effector& ea : effectors_at) {
+    const size_t k = ea.term;
     const MeasureSpec& m = run_.terms[k];
-    const Eigen::Vector3d p =
-        poses[static_cast<size_t>(m.end_effector.body)].Point(m.end_effector.point);
+    const Eigen::Vector3d p = poses[static_cast<size_t>(ea.at.body)].Point(ea.at.point);
     nlohmann::json e = {{"measure", m.measure}, {"point", {p[0], p[1], p[2]}}};
     if (dexterity_[k]) {
       try {
-        const Eigen::MatrixXd J = dexterity_[k]->Evaluate(q, false).J;
+        const Eigen::MatrixXd J = dexterity_[k]->Evaluate(ea.q, false).J;
         nlohmann::json rows = nlohmann::json::array();
         for (int r = 0; r < 3; ++r) {
           rows.push_back(std::vector<double>(J.cols()));
@@ -628,11 +702,25 @@ nlohmann::json Study::Header() const {
   for (const MeasureSpec& m : run_.terms) {
     nlohmann::json t = {{"measure", m.measure}, {"weight", m.weight}};
     std::vector<std::string> joints;
-    for (int k : m.joints) joints.push_back(s.joints[static_cast<size_t>(k)].name);
+    const server::Scene& named = run_.configurations ? *run_.configurations->base : s;
+    for (int k : m.joints) joints.push_back(named.joints[static_cast<size_t>(k)].name);
     if (!joints.empty()) t["joints"] = joints;
     terms.push_back(t);
   }
   j["objective"] = terms;
+  if (run_.configurations) {
+    const ConfigurationsSpec& c = *run_.configurations;
+    const server::JointSpec& js = c.base->joints[static_cast<size_t>(c.joint)];
+    std::vector<double> values;
+    for (double v : c.values) values.push_back(c.prismatic ? v : v / kDeg);
+    j["configurations"] = {{"joint", js.name},
+                           {c.prismatic ? "values" : "values_deg", values},
+                           {"tolerance", c.tolerance},
+                           {"objective",
+                            "worst case over the configurations, smoothed: within "
+                            "tolerance of the exact worst case (measures \"worst "
+                            "case\")"}};
+  }
   std::vector<std::string> constraints;
   for (const ConstraintSpec& c : run_.constraints) constraints.push_back(c.name);
   j["constraints"] = constraints;

@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "design/configurations.h"
 #include "design/run_file.h"
 #include "optimizer/dexterity.h"
 #include "optimizer/problem.h"
@@ -98,6 +99,8 @@ class Study {
   /// The start of case `index`: the scene's joints at `angles` (*ok), then the run's
   /// constraints and bounds met too where they can be (*feasible, may be null).
   optimizer::TermPtr DesignBounds(const DesignJointSpec& d) const;
+  /// With configurations: each copy's configuration joint at its value.
+  void AddConfigurations(std::map<int, double>* angles) const;
   /// Adds the scene's joints to p and, with `bounded`, their limits, the run's bounds and the
   /// design joints' bounds.
   void AddMechanism(optimizer::Problem* p, bool bounded) const;
@@ -116,6 +119,10 @@ class Study {
   RunSpec run_;
   optimizer::Problem joints_only_;  ///< the scene's joints: the dexterity's mechanism
   optimizer::Problem problem_;
+  /// With configurations: the base scene's joints (the measures' mechanism, one copy) and the
+  /// worst case over the copies, the objective.
+  std::unique_ptr<optimizer::Problem> base_joints_;
+  std::shared_ptr<WorstCase> worst_;
   std::vector<std::shared_ptr<optimizer::Dexterity>> dexterity_;  ///< per term (or null)
   std::vector<optimizer::TermPtr> distance_terms_;                ///< per term (or null)
   std::vector<RowName> equality_names_, inequality_names_;

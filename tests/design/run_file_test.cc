@@ -56,9 +56,9 @@ TEST(RunFileTest, AGoodRunFileNamesTheScenesParts) {
 
 TEST(RunFileTest, BadInputIsRejectedNamingFilePointerAndProblem) {
   EXPECT_EQ(ErrorOf("\"objective\"", "\"objectve\""),
-            "run.json: /objectve: unknown field \"objectve\" (known: bounds, comment, constraints, "
-            "design, "
-            "grid, length_unit, objective, scene, solver, starts)");
+            "run.json: /objectve: unknown field \"objectve\" (known: bounds, comment, "
+            "configurations, constraints, design, grid, length_unit, objective, scene, solver, "
+            "starts)");
   EXPECT_THAT(ErrorOf("three_link_finger.json", "nowhere.json"),
               HasSubstr("run.json: /scene: the scene could not be loaded: "));
   EXPECT_THAT(ErrorOf("\"middle joint\"]", "\"midle joint\"]"),
