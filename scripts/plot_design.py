@@ -8,6 +8,8 @@ writes into DIR (default: next to RESULT.json):
                           best case (the other optima faint behind it);
   <name>.mechanism.png    the mechanism at the best optimum with its manipulability ellipsoid
                           {J u : |u| <= 1} at the end effector (scaled, the scale in the title);
+                          for a run over configurations, the mechanism at each of them and the
+                          objective at each with its worst case;
   <map>.map.png           with --map: the optimal objective over a result's 2-D grid, points
                           that cannot be reached (infeasible) shaded with their boundary drawn,
                           the grid's best point and RESULT's free optimum marked.
@@ -87,10 +89,84 @@ def ellipsoid(J, scale, n=24):
     return [np.einsum("ij,jkl->ikl", u[:, :3] * s[:3], sphere)]
 
 
+def configurations(result, out):
+    """A run over a range of motion: the mechanism at each configuration (one colour per body,
+    darker for later configurations, the end effector's path through them), and each
+    configuration's measure at the best design with the worst case marked."""
+    geo = result["best_geometry"]
+    conf = result["configurations"]
+    best = next(c for c in result["results"] if c["case"] == result["best_case"])
+    fig = plt.figure(figsize=(12, 5.5))
+    ax = fig.add_subplot(1, 2, 1, projection="3d")
+    bases = []
+    for b in geo["bodies"]:
+        base = b["name"].split("@")[0]
+        if base not in bases:
+            bases.append(base)
+    copies = max([int(b["name"].split("@")[1]) for b in geo["bodies"] if "@" in b["name"]] or [1])
+    labelled = set()
+    everything = []
+    for b in geo["bodies"]:
+        pts = np.array(b["points"])
+        if len(pts) == 0:
+            continue
+        everything.append(pts)
+        base = b["name"].split("@")[0]
+        k = int(b["name"].split("@")[1]) if "@" in b["name"] else copies
+        if len(pts) >= 3:
+            pts = np.vstack([pts, pts[:1]])
+        ax.plot(pts[:, 0], pts[:, 1], pts[:, 2], lw=1.5 if b["fixed"] else 3,
+                color="0.3" if b["fixed"] else f"C{bases.index(base) % 10}",
+                alpha=0.25 + 0.75 * k / copies, marker="o", ms=3,
+                label=None if b["fixed"] or base in labelled else base)
+        labelled.add(base)
+    path = np.array([e["point"] for e in geo["end_effectors"]])
+    ax.plot(path[:, 0], path[:, 1], path[:, 2], color="k", lw=1, ls="--", marker="o", ms=4,
+            label="end effector at each configuration")
+    everything = np.vstack(everything)
+    centre, half = everything.mean(axis=0), 0.6 * float(np.ptp(everything, axis=0).max())
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_zlabel("z (m)")
+    ax.legend(loc="upper left", fontsize=8)
+    design = ", ".join(f"{k} {v:.4g}" for k, v in best["design"].items())
+    ax.set_title(f"the mechanism at its {copies} configurations\n(design: {design})", fontsize=9)
+
+    ax2 = fig.add_subplot(1, 2, 2)
+    unit = "deg" if "values_deg" in conf else "m"
+    values = np.array(conf.get("values_deg", conf.get("values")))
+    measure = result["objective"][0]["measure"]
+    per = [list(m.values())[0] for m in best["measures"] if "@" in list(m.keys())[0]]
+    terms = len(result["objective"])
+    per = np.array(per).reshape(len(values), terms)
+    weights = np.array([t["weight"] for t in result["objective"]])
+    F = per @ weights
+    worst = next(list(m.values())[0] for m in best["measures"] if "worst case" in m)
+    ax2.plot(values, F, color="C0", marker="o", label="F at each configuration")
+    ax2.axhline(worst, color="C3", ls="--", label=f"worst case {worst:.6g}")
+    ax2.axhline(best["objective"], color="0.5", ls=":",
+                label=f"smooth worst case (objective) {best['objective']:.6g}")
+    ax2.set_xlabel(f"{conf['joint']} ({unit})")
+    ax2.set_ylabel(measure if terms == 1 else "F = sum of weighted measures")
+    ax2.set_title(f"{os.path.basename(result['run'])}: {label(result)}, worst case over "
+                  f"{conf['joint']}\n(tolerance {conf['tolerance']:g})", fontsize=9)
+    ax2.legend(fontsize=8)
+    ax2.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
 def mechanism(result, out):
     geo = result.get("best_geometry")
     if not geo:
         return None
+    if "configurations" in result:
+        return configurations(result, out)
     fig = plt.figure(figsize=(7.5, 6.5))
     ax = fig.add_subplot(projection="3d")
     for s in geo["surfaces"]:
