@@ -1,0 +1,108 @@
+#pragma once
+
+// Trimmed surfaces (docs/trimming.md): the material of a CAD face is the part of its surface's
+// parameter domain inside an outer loop and outside its holes, each loop a closed chain of 2-D
+// NURBS curves (lines and polylines as degree-1 curves).
+//
+// Exact near the boundary. Each curve is cut into Bézier pieces and those subdivided until every
+// piece's control polygon lies within a band β of its chord; a rational piece with positive
+// weights lies in the convex hull of its control points, and the β-neighbourhood of a segment is
+// convex, so the curve lies within β of the polygon made of the chords (certified). A point
+// farther than its nearest chord's β from every chord is classified by that polygon with exact
+// predicates (CGAL's Epick kernel: the answer is the exact answer for the polygon's double
+// vertices); a point within the band is classified by the curve itself: its closest point on the
+// loops (Newton on the exact curve from the chord's estimate) and the side of the loop it lies on.
+//
+// Conventions: the outer loop runs counter-clockwise and holes clockwise, so the material is on
+// the left of every loop's direction (a loop given the other way round is reversed, with a
+// warning). Without an outer loop the material is the whole domain less the holes.
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "nurbs/curve.h"
+
+namespace tangent::nurbs {
+
+/// A trimming loop that cannot be used, named: "hole 1: curve 2 ends at (0.5, 0.25) but curve 3
+/// starts at (0.5, 0.3): a gap of 0.05 (tolerance 1.4e-09)".
+class TrimError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct TrimLoop {
+  std::vector<NurbsCurve2d> curves;  ///< in order, each starting where the previous ends
+};
+
+struct TrimOptions {
+  /// Largest gap between one curve's end and the next one's start (and around the loop),
+  /// relative to the domain's diagonal.
+  double closure_tolerance = 1e-9;
+  /// β, the certified band of the polygonization, relative to the domain's diagonal: the curves
+  /// lie within β of their chords (pieces are subdivided until they do, and further where two
+  /// loops' or a loop's own bands would overlap).
+  double band = 1e-4;
+};
+
+class TrimmedDomain {
+ public:
+  /// One chord of the certified polygonization: the piece of curve `curve` of loop `loop`
+  /// between parameters t0 and t1 lies within `band` of the segment from a to b.
+  struct Chord {
+    Eigen::Vector2d a, b;
+    int loop = 0, curve = 0;
+    double t0 = 0.0, t1 = 0.0;
+    double band = 0.0;
+  };
+  /// The closest point of the loops to a parameter point.
+  struct Closest {
+    double signed_distance = 0.0;  ///< > 0 on the material, < 0 off it (parametric units)
+    int loop = -1, curve = -1;     ///< loop index (0: the outer loop when there is one)
+    double t = 0.0;                ///< the curve's parameter there
+    Eigen::Vector2d point = Eigen::Vector2d::Zero();
+  };
+
+  /// Validates the loops in the domain [lo, hi] of a surface: every loop closed, inside the
+  /// domain, not crossing or touching itself or another loop, holes inside the outer loop and
+  /// not inside one another; a loop running the wrong way is reversed and *warnings (may be
+  /// null) says so. @throws TrimError naming the loop and curve.
+  TrimmedDomain(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi,
+                std::optional<TrimLoop> outer, std::vector<TrimLoop> holes,
+                const TrimOptions& options = {}, std::vector<std::string>* warnings = nullptr);
+
+  /// Whether (u, v) is on the material (the boundary itself counts as material).
+  bool Contains(const Eigen::Vector2d& uv) const;
+  /// The closest point of the loops to (u, v) and the signed distance to it.
+  Closest Nearest(const Eigen::Vector2d& uv) const;
+
+  bool has_outer() const { return has_outer_; }
+  /// Loops in order: the outer loop first when there is one, then the holes.
+  const std::vector<TrimLoop>& loops() const { return loops_; }
+  const std::vector<Chord>& chords() const { return chords_; }
+  const Eigen::Vector2d& lo() const { return lo_; }
+  const Eigen::Vector2d& hi() const { return hi_; }
+  /// A loop's name in messages: "outer loop" or "hole k".
+  std::string LoopName(int loop) const;
+
+ private:
+  /// The polygon's verdict for a point farther than every chord's band from it.
+  bool PolygonContains(const Eigen::Vector2d& uv) const;
+  /// Newton on curve (loop, curve) for the point closest to uv, from parameter t.
+  Closest RefineOn(int loop, int curve, double t, const Eigen::Vector2d& uv) const;
+  /// Whether uv lies on the material side of the loop at its closest point c.
+  bool OnMaterialSide(const Closest& c, const Eigen::Vector2d& uv) const;
+
+  Eigen::Vector2d lo_, hi_;
+  bool has_outer_ = false;
+  std::vector<TrimLoop> loops_;
+  std::vector<Chord> chords_;
+  std::vector<std::vector<int>> loop_chords_;  ///< per loop, its chords in order
+  double max_band_ = 0.0;
+};
+
+}  // namespace tangent::nurbs

@@ -1,0 +1,230 @@
+// Trimming loops: point classification against exact references on 10^5 random points (a
+// rational circle's hole, decided analytically; a cubic outer loop, decided by a dense
+// polygon), the signed distance and closest point against the analytic circle, and every kind
+// of bad loop rejected with a message naming it.
+
+#include "nurbs/trim.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace tangent::nurbs {
+namespace {
+
+using ::testing::HasSubstr;
+using V = Eigen::Vector2d;
+
+// The exact rational quadratic circle (9 control points), counter-clockwise from angle a0.
+NurbsCurve2d Circle(const V& centre, double r, bool clockwise = false) {
+  const double w = std::sqrt(0.5);
+  std::vector<V> p;
+  const double s = clockwise ? -1.0 : 1.0;
+  const V corners[9] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
+  for (const V& c : corners) p.push_back(centre + r * V(c[0], s * c[1]));
+  return NurbsCurve2d(KnotVector(2, {0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1}), p,
+                      {1, w, 1, w, 1, w, 1, w, 1});
+}
+
+// A polyline as one degree-1 curve (its vertices are C⁰ knots).
+NurbsCurve2d Polyline(const std::vector<V>& points) {
+  std::vector<double> knots{0.0};
+  for (size_t i = 0; i < points.size(); ++i) knots.push_back(static_cast<double>(i));
+  knots.push_back(static_cast<double>(points.size() - 1));
+  return NurbsCurve2d(KnotVector(1, knots), points);
+}
+
+TrimLoop Loop(std::vector<NurbsCurve2d> curves) { return TrimLoop{std::move(curves)}; }
+
+const V kLo(0, 0), kHi(1, 1);
+
+TEST(TrimTest, ACircularHoleIsClassifiedExactlyOn100kPoints) {
+  const V c(0.43, 0.52);
+  const double r = 0.21;
+  std::vector<std::string> warnings;
+  const TrimmedDomain d(kLo, kHi, std::nullopt, {Loop({Circle(c, r, true)})}, {}, &warnings);
+  EXPECT_TRUE(warnings.empty());
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int disagreements = 0, near = 0, checked = 0;
+  const double kBand = 1e-12;  // the stated band: within it either answer is accepted
+  for (int i = 0; i < 100000; ++i) {
+    V p;
+    if (i % 2 == 0) {
+      p = V(unit(rng), unit(rng));
+    } else {  // near the circle: 10^-13 .. 10^-2 off it, either side
+      const double angle = 2 * M_PI * unit(rng);
+      const double off = std::pow(10.0, -13.0 + 11.0 * unit(rng)) * (unit(rng) < 0.5 ? -1 : 1);
+      p = c + (r + off) * V(std::cos(angle), std::sin(angle));
+      near += std::abs(off) < 1e-4;  // inside the polygon's band
+    }
+    const double exact = (p - c).norm() - r;
+    if (std::abs(exact) <= kBand) continue;
+    ++checked;
+    disagreements += d.Contains(p) != (exact > 0.0);
+  }
+  std::printf("%d points checked (%d within the polygon's band), %d disagreements\n", checked,
+              near, disagreements);
+  EXPECT_GT(near, 20000);
+  EXPECT_EQ(disagreements, 0);
+}
+
+TEST(TrimTest, SignedDistanceAndClosestPointMatchTheCircle) {
+  const V c(0.5, 0.5);
+  const double r = 0.2;
+  const TrimmedDomain d(kLo, kHi, std::nullopt, {Loop({Circle(c, r, true)})});
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  double worst = 0.0;
+  for (int i = 0; i < 2000; ++i) {
+    const double angle = 2 * M_PI * unit(rng);
+    const V p = c + (r * (0.3 + 1.4 * unit(rng))) * V(std::cos(angle), std::sin(angle));
+    const TrimmedDomain::Closest n = d.Nearest(p);
+    const double exact = (p - c).norm() - r;  // > 0 outside the hole: material
+    worst = std::max(worst, std::abs(n.signed_distance - exact));
+    EXPECT_NEAR((n.point - c).norm(), r, 1e-14);
+    const V on = d.loops()[0].curves[0].Evaluate(n.t, 0).C;
+    EXPECT_NEAR((on - n.point).norm(), 0.0, 1e-15);
+  }
+  std::printf("largest signed-distance error %.2e\n", worst);
+  EXPECT_LT(worst, 1e-13);
+}
+
+TEST(TrimTest, ACubicOuterLoopAgreesWithADensePolygonOutsideItsBand) {
+  // Two cubic Béziers forming a blob, counter-clockwise, with a square polyline hole.
+  const NurbsCurve2d upper(KnotVector(3, {0, 0, 0, 0, 1, 1, 1, 1}),
+                           {V(0.1, 0.5), V(0.1, 1.1), V(0.9, 0.7), V(0.9, 0.4)}, {1, 2, 0.5, 1});
+  const NurbsCurve2d lower(KnotVector(3, {0, 0, 0, 0, 1, 1, 1, 1}),
+                           {V(0.9, 0.4), V(0.9, -0.1), V(0.2, 0.0), V(0.1, 0.5)});
+  std::vector<std::string> warnings;
+  // Given clockwise on purpose: reversed with a warning.
+  const TrimmedDomain cw(kLo, kHi, Loop({upper, lower}), {}, {}, &warnings);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_THAT(warnings[0], HasSubstr("outer loop ran clockwise; reversed"));
+  const TrimmedDomain d(kLo, kHi, cw.loops()[0],
+                        {Loop({Polyline({V(0.4, 0.3), V(0.4, 0.5), V(0.6, 0.5), V(0.6, 0.3),
+                                         V(0.4, 0.3)})})});
+  // The reference: each curve sampled densely, crossings counted exactly on that polygon.
+  std::vector<V> dense;
+  for (const NurbsCurve2d* f : {&d.loops()[0].curves[0], &d.loops()[0].curves[1]}) {
+    for (int k = 0; k < 5000; ++k) dense.push_back(f->Evaluate(k / 5000.0, 0).C);
+  }
+  auto in_dense = [&](const V& p) {
+    bool in = false;
+    for (size_t i = 0, j = dense.size() - 1; i < dense.size(); j = i++) {
+      if ((dense[i][1] > p[1]) != (dense[j][1] > p[1]) &&
+          p[0] < (dense[j][0] - dense[i][0]) * (p[1] - dense[i][1]) / (dense[j][1] - dense[i][1]) +
+                     dense[i][0]) {
+        in = !in;
+      }
+    }
+    return in;
+  };
+  auto dense_distance = [&](const V& p) {
+    double best = 1e300;
+    for (size_t i = 0, j = dense.size() - 1; i < dense.size(); j = i++) {
+      const V e = dense[i] - dense[j];
+      const double f = std::clamp((p - dense[j]).dot(e) / e.squaredNorm(), 0.0, 1.0);
+      best = std::min(best, (dense[j] + f * e - p).norm());
+    }
+    return best;
+  };
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int disagreements = 0, checked = 0;
+  for (int i = 0; i < 100000; ++i) {
+    const V p(unit(rng), unit(rng));
+    const bool in_hole = p[0] > 0.4 && p[0] < 0.6 && p[1] > 0.3 && p[1] < 0.5;
+    const bool reference = in_dense(p) && !in_hole;
+    const bool ours = d.Contains(p);
+    if (ours == reference) {
+      ++checked;
+      continue;
+    }
+    // Disagreement: only acceptable within the dense polygon's own error (its chords' sagitta,
+    // below 1e-6 here) of the outer curve, or on the hole's edge.
+    const double to_hole = std::min({std::abs(p[0] - 0.4), std::abs(p[0] - 0.6),
+                                     std::abs(p[1] - 0.3), std::abs(p[1] - 0.5)});
+    if (dense_distance(p) > 1e-6 && to_hole > 1e-15) ++disagreements;
+  }
+  std::printf("%d agree, %d disagreements outside the reference's band\n", checked,
+              disagreements);
+  EXPECT_EQ(disagreements, 0);
+  // The polyline hole's corners: a point diagonally off a corner is off the material.
+  EXPECT_FALSE(d.Contains(V(0.4 + 1e-9, 0.3 + 1e-9)));
+  EXPECT_TRUE(d.Contains(V(0.4 - 1e-9, 0.3 - 1e-9)));
+  EXPECT_NEAR(d.Nearest(V(0.4 - 3e-9, 0.3 - 4e-9)).signed_distance, 5e-9, 1e-15);
+}
+
+std::string ErrorOf(std::optional<TrimLoop> outer, std::vector<TrimLoop> holes) {
+  try {
+    TrimmedDomain(kLo, kHi, std::move(outer), std::move(holes));
+  } catch (const TrimError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "accepted";
+  return "";
+}
+
+TEST(TrimTest, BadLoopsAreRejectedNamingTheLoopAndCurve) {
+  const TrimLoop square = Loop({Polyline({V(0.1, 0.1), V(0.9, 0.1), V(0.9, 0.9), V(0.1, 0.9),
+                                          V(0.1, 0.1)})});
+  // Open: two curves that do not meet.
+  EXPECT_THAT(ErrorOf(std::nullopt, {Loop({Polyline({V(0.2, 0.2), V(0.3, 0.2), V(0.3, 0.3)}),
+                                           Polyline({V(0.3, 0.31), V(0.2, 0.2)})})}),
+              HasSubstr("hole 0 is not closed: curve 0 ends at (0.3, 0.3) but curve 1 starts at "
+                        "(0.3, 0.31): a gap of 0.01"));
+  // Crossing loops: two holes overlapping.
+  EXPECT_THAT(ErrorOf(square, {Loop({Circle(V(0.4, 0.5), 0.15)}), Loop({Circle(V(0.6, 0.5), 0.15)})}),
+              HasSubstr("hole 1 crosses or touches the hole 0"));
+  // A figure of eight.
+  EXPECT_THAT(ErrorOf(std::nullopt, {Loop({Polyline({V(0.2, 0.2), V(0.4, 0.4), V(0.4, 0.2),
+                                                     V(0.2, 0.4), V(0.2, 0.2)})})}),
+              HasSubstr("hole 0 crosses or touches itself"));
+  // Outside the domain.
+  EXPECT_THAT(ErrorOf(std::nullopt, {Loop({Circle(V(0.95, 0.5), 0.1)})}),
+              HasSubstr("hole 0: curve 0 leaves the surface's domain (0, 0) to (1, 1) at"));
+  // A hole outside the outer loop, and one inside another.
+  EXPECT_THAT(ErrorOf(Loop({Circle(V(0.3, 0.3), 0.2)}), {Loop({Circle(V(0.8, 0.8), 0.1)})}),
+              HasSubstr("hole 0 is not inside the outer loop"));
+  EXPECT_THAT(ErrorOf(square, {Loop({Circle(V(0.5, 0.5), 0.3)}), Loop({Circle(V(0.5, 0.5), 0.1)})}),
+              HasSubstr("hole 1 lies inside hole 0"));
+  // A hole tangent to the outer loop.
+  EXPECT_THAT(ErrorOf(square, {Loop({Circle(V(0.5, 0.3), 0.2)})}),
+              HasSubstr("hole 0 crosses or touches the outer loop"));
+  // A loop that goes out and comes back the same way.
+  EXPECT_THAT(ErrorOf(std::nullopt, {Loop({Polyline({V(0.2, 0.2), V(0.4, 0.4)}),
+                                           Polyline({V(0.4, 0.4), V(0.2, 0.2)})})}),
+              HasSubstr("hole 0 turns back on itself"));
+  // A loop with no curves.
+  EXPECT_THAT(ErrorOf(square, {Loop({})}), HasSubstr("hole 0 has no curves"));
+}
+
+TEST(TrimTest, ANearlyTangentHoleIsSeparatedByRefiningTheBands) {
+  // 1e-7 from the outer loop: the bands (1e-4 of the diagonal) overlap there at first and are
+  // halved until they part; the thin sliver of material between them is classified exactly.
+  const TrimLoop square = Loop({Polyline({V(0.1, 0.1), V(0.9, 0.1), V(0.9, 0.9), V(0.1, 0.9),
+                                          V(0.1, 0.1)})});
+  const TrimmedDomain d(kLo, kHi, square, {Loop({Circle(V(0.5, 0.3 + 1e-7), 0.2, true)})});
+  EXPECT_TRUE(d.Contains(V(0.5, 0.1 + 0.5e-7)));   // the sliver
+  EXPECT_FALSE(d.Contains(V(0.5, 0.1 + 1.5e-7)));  // in the hole
+  EXPECT_FALSE(d.Contains(V(0.5, 0.1 - 0.5e-7)));  // outside the outer loop
+  EXPECT_NEAR(d.Nearest(V(0.5, 0.1 + 0.25e-7)).signed_distance, 0.25e-7, 1e-15);
+}
+
+TEST(TrimTest, HolesGivenCounterClockwiseAreReversedWithAWarning) {
+  std::vector<std::string> warnings;
+  const TrimmedDomain d(kLo, kHi, std::nullopt, {Loop({Circle(V(0.5, 0.5), 0.2)})}, {},
+                        &warnings);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_THAT(warnings[0], HasSubstr("hole 0 ran counter-clockwise; reversed"));
+  EXPECT_FALSE(d.Contains(V(0.5, 0.5)));
+  EXPECT_TRUE(d.Contains(V(0.05, 0.05)));
+  EXPECT_FALSE(d.Contains(V(1.5, 0.5)));  // off the domain
+  EXPECT_NEAR(d.Nearest(V(0.5, 0.5)).signed_distance, -0.2, 1e-14);
+}
+
+}  // namespace
+}  // namespace tangent::nurbs
