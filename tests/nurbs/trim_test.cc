@@ -22,7 +22,8 @@ NurbsCurve2d Circle(const V& centre, double r, bool clockwise = false) {
   const double w = std::sqrt(0.5);
   std::vector<V> p;
   const double s = clockwise ? -1.0 : 1.0;
-  const V corners[9] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
+  const V corners[9] = {{1, 0},   {1, 1},  {0, 1},  {-1, 1}, {-1, 0},
+                        {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
   for (const V& c : corners) p.push_back(centre + r * V(c[0], s * c[1]));
   return NurbsCurve2d(KnotVector(2, {0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1}), p,
                       {1, w, 1, w, 1, w, 1, w, 1});
@@ -65,8 +66,8 @@ TEST(TrimTest, ACircularHoleIsClassifiedExactlyOn100kPoints) {
     ++checked;
     disagreements += d.Contains(p) != (exact > 0.0);
   }
-  std::printf("%d points checked (%d within the polygon's band), %d disagreements\n", checked,
-              near, disagreements);
+  std::printf("%d points checked (%d within the polygon's band), %d disagreements\n", checked, near,
+              disagreements);
   EXPECT_GT(near, 20000);
   EXPECT_EQ(disagreements, 0);
 }
@@ -103,9 +104,9 @@ TEST(TrimTest, ACubicOuterLoopAgreesWithADensePolygonOutsideItsBand) {
   const TrimmedDomain cw(kLo, kHi, Loop({upper, lower}), {}, {}, &warnings);
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_THAT(warnings[0], HasSubstr("outer loop ran clockwise; reversed"));
-  const TrimmedDomain d(kLo, kHi, cw.loops()[0],
-                        {Loop({Polyline({V(0.4, 0.3), V(0.4, 0.5), V(0.6, 0.5), V(0.6, 0.3),
-                                         V(0.4, 0.3)})})});
+  const TrimmedDomain d(
+      kLo, kHi, cw.loops()[0],
+      {Loop({Polyline({V(0.4, 0.3), V(0.4, 0.5), V(0.6, 0.5), V(0.6, 0.3), V(0.4, 0.3)})})});
   // The reference: each curve sampled densely, crossings counted exactly on that polygon.
   std::vector<V> dense;
   for (const NurbsCurve2d* f : {&d.loops()[0].curves[0], &d.loops()[0].curves[1]}) {
@@ -145,12 +146,11 @@ TEST(TrimTest, ACubicOuterLoopAgreesWithADensePolygonOutsideItsBand) {
     }
     // Disagreement: only acceptable within the dense polygon's own error (its chords' sagitta,
     // below 1e-6 here) of the outer curve, or on the hole's edge.
-    const double to_hole = std::min({std::abs(p[0] - 0.4), std::abs(p[0] - 0.6),
-                                     std::abs(p[1] - 0.3), std::abs(p[1] - 0.5)});
+    const double to_hole = std::min(
+        {std::abs(p[0] - 0.4), std::abs(p[0] - 0.6), std::abs(p[1] - 0.3), std::abs(p[1] - 0.5)});
     if (dense_distance(p) > 1e-6 && to_hole > 1e-15) ++disagreements;
   }
-  std::printf("%d agree, %d disagreements outside the reference's band\n", checked,
-              disagreements);
+  std::printf("%d agree, %d disagreements outside the reference's band\n", checked, disagreements);
   EXPECT_EQ(disagreements, 0);
   // The polyline hole's corners: a point diagonally off a corner is off the material.
   EXPECT_FALSE(d.Contains(V(0.4 + 1e-9, 0.3 + 1e-9)));
@@ -169,16 +169,17 @@ std::string ErrorOf(std::optional<TrimLoop> outer, std::vector<TrimLoop> holes) 
 }
 
 TEST(TrimTest, BadLoopsAreRejectedNamingTheLoopAndCurve) {
-  const TrimLoop square = Loop({Polyline({V(0.1, 0.1), V(0.9, 0.1), V(0.9, 0.9), V(0.1, 0.9),
-                                          V(0.1, 0.1)})});
+  const TrimLoop square =
+      Loop({Polyline({V(0.1, 0.1), V(0.9, 0.1), V(0.9, 0.9), V(0.1, 0.9), V(0.1, 0.1)})});
   // Open: two curves that do not meet.
   EXPECT_THAT(ErrorOf(std::nullopt, {Loop({Polyline({V(0.2, 0.2), V(0.3, 0.2), V(0.3, 0.3)}),
                                            Polyline({V(0.3, 0.31), V(0.2, 0.2)})})}),
               HasSubstr("hole 0 is not closed: curve 0 ends at (0.3, 0.3) but curve 1 starts at "
                         "(0.3, 0.31): a gap of 0.01"));
   // Crossing loops: two holes overlapping.
-  EXPECT_THAT(ErrorOf(square, {Loop({Circle(V(0.4, 0.5), 0.15)}), Loop({Circle(V(0.6, 0.5), 0.15)})}),
-              HasSubstr("hole 1 crosses or touches the hole 0"));
+  EXPECT_THAT(
+      ErrorOf(square, {Loop({Circle(V(0.4, 0.5), 0.15)}), Loop({Circle(V(0.6, 0.5), 0.15)})}),
+      HasSubstr("hole 1 crosses or touches the hole 0"));
   // A figure of eight.
   EXPECT_THAT(ErrorOf(std::nullopt, {Loop({Polyline({V(0.2, 0.2), V(0.4, 0.4), V(0.4, 0.2),
                                                      V(0.2, 0.4), V(0.2, 0.2)})})}),
@@ -195,9 +196,10 @@ TEST(TrimTest, BadLoopsAreRejectedNamingTheLoopAndCurve) {
   EXPECT_THAT(ErrorOf(square, {Loop({Circle(V(0.5, 0.3), 0.2)})}),
               HasSubstr("hole 0 crosses or touches the outer loop"));
   // A loop that goes out and comes back the same way.
-  EXPECT_THAT(ErrorOf(std::nullopt, {Loop({Polyline({V(0.2, 0.2), V(0.4, 0.4)}),
-                                           Polyline({V(0.4, 0.4), V(0.2, 0.2)})})}),
-              HasSubstr("hole 0 turns back on itself"));
+  EXPECT_THAT(
+      ErrorOf(std::nullopt,
+              {Loop({Polyline({V(0.2, 0.2), V(0.4, 0.4)}), Polyline({V(0.4, 0.4), V(0.2, 0.2)})})}),
+      HasSubstr("hole 0 turns back on itself"));
   // A loop with no curves.
   EXPECT_THAT(ErrorOf(square, {Loop({})}), HasSubstr("hole 0 has no curves"));
 }
@@ -205,8 +207,8 @@ TEST(TrimTest, BadLoopsAreRejectedNamingTheLoopAndCurve) {
 TEST(TrimTest, ANearlyTangentHoleIsSeparatedByRefiningTheBands) {
   // 1e-7 from the outer loop: the bands (1e-4 of the diagonal) overlap there at first and are
   // halved until they part; the thin sliver of material between them is classified exactly.
-  const TrimLoop square = Loop({Polyline({V(0.1, 0.1), V(0.9, 0.1), V(0.9, 0.9), V(0.1, 0.9),
-                                          V(0.1, 0.1)})});
+  const TrimLoop square =
+      Loop({Polyline({V(0.1, 0.1), V(0.9, 0.1), V(0.9, 0.9), V(0.1, 0.9), V(0.1, 0.1)})});
   const TrimmedDomain d(kLo, kHi, square, {Loop({Circle(V(0.5, 0.3 + 1e-7), 0.2, true)})});
   EXPECT_TRUE(d.Contains(V(0.5, 0.1 + 0.5e-7)));   // the sliver
   EXPECT_FALSE(d.Contains(V(0.5, 0.1 + 1.5e-7)));  // in the hole
@@ -216,8 +218,7 @@ TEST(TrimTest, ANearlyTangentHoleIsSeparatedByRefiningTheBands) {
 
 TEST(TrimTest, HolesGivenCounterClockwiseAreReversedWithAWarning) {
   std::vector<std::string> warnings;
-  const TrimmedDomain d(kLo, kHi, std::nullopt, {Loop({Circle(V(0.5, 0.5), 0.2)})}, {},
-                        &warnings);
+  const TrimmedDomain d(kLo, kHi, std::nullopt, {Loop({Circle(V(0.5, 0.5), 0.2)})}, {}, &warnings);
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_THAT(warnings[0], HasSubstr("hole 0 ran counter-clockwise; reversed"));
   EXPECT_FALSE(d.Contains(V(0.5, 0.5)));

@@ -1,0 +1,90 @@
+#pragma once
+
+// The trimming constraints of seed 001 §3.4 (docs/trimming.md): a contact between a trimmed
+// surface f on body a and a surface g on body b stays on f's material, or on its edge.
+//
+// Two extremal problems are tracked: the contact's, the pair (u_e, s_e) of f and g
+// (contact::SolveSurfaceSurface), and the trim edge's, the point of the edge curve
+// E(τ) = f(c(τ)) (c a curve of a trimming loop in f's domain) nearest g, (τ*, s_c)
+// (contact::SolveCurveSurface through the curve–surface relations, seed 001 Eqs. 22–24). With
+// the material on the left of c (trim.h) and the edge point c* = c(τ*):
+//   kParametric    r = ν(τ*)·(u_e − c*),               ν = J c'/|c'| the domain normal into the
+//                                                      material (J a quarter turn),
+//   kSameSurface   r = m(τ*)·(f(u_e) − f(c*)),          m = n × E'/|E'| the edge's in-surface
+//                                                      normal into the material (f's frame),
+//   kOtherSurface  r = m_W(τ*)·(g(s_e) − f(c*)),        g's contact point against the edge point
+//                                                      (world),
+// as an inequality r ≥ 0 (the contact keeps to the material) or an equality r = 0 (the contact
+// on the edge). The seed writes the norms |u_e − c*| etc.; the projections on the edge's normal
+// are their signed, differentiable forms (equal where the contact sits on the edge's normal).
+//
+// Exact Jacobians through both extremal Jacobians (u_e,q: contact::ContactJacobianImplicit;
+// τ_q: contact::CurveSurfaceJacobianImplicit). Since ν ⟂ c' and m ⟂ E', the edge point's own
+// motion drops out and only the normal's turning with τ remains:
+//   kParametric    r_q = ν·u_e,q + ((u_e − c*)·ν') τ_q
+//   kSameSurface   r_q = m·(f_u u_e,q + f_v v_e,q) + ((f(u_e) − E)·m') τ_q        (f's frame)
+//   kOtherSurface  r_q = m_W·(g_q|_s + g_s s_q + g_t t_q − E_q|_τ) + Δ·(∂(R_a m)/∂q_a + R_a m' τ_q)
+// with ν' = J(c''/|c'| − c'(c'·c'')/|c'|³), m' = n' × T + n × T', n' the unit normal's change
+// along the edge and T' = (I − TTᵀ)E''/|E'|. No second derivatives (Gauss–Newton).
+
+#include <memory>
+
+#include "contact/extremal.h"
+#include "contact/placed.h"
+#include "nurbs/curve.h"
+#include "nurbs/surface.h"
+#include "optimizer/term.h"
+
+namespace tangent::optimizer {
+
+enum class TrimForm { kParametric, kSameSurface, kOtherSurface };
+const char* ToString(TrimForm form);
+
+class TrimConstraintTerm final : public Term {
+ public:
+  struct State final : TermState {
+    Eigen::Vector4d pair;  ///< the contact's tracked (u, v, s, t)
+    Eigen::Vector3d edge;  ///< the edge's tracked (s, t, τ): g's parameters, then the curve's
+    Vector7d q_a, q_b;
+    bool valid = false;
+    contact::SurfaceSurfaceExtremum pair_ext;
+    contact::SurfacePairEval pair_eval;
+    contact::CurveSurfaceExtremum edge_ext;
+    contact::CurveSurfaceEval edge_eval;
+  };
+  /// f (on body a) carries the trim curve `curve` (in f's domain, material on its left); the
+  /// surfaces and the curve must outlive the term. Seeds: the pair's (u, v, s, t) and the edge's
+  /// (s, t, τ).
+  TrimConstraintTerm(TrimForm form, int body_a, const nurbs::NurbsSurface* f,
+                     const nurbs::NurbsCurve2d* curve, int body_b, const nurbs::NurbsSurface* g,
+                     const Eigen::Vector4d& pair_seed, const Eigen::Vector3d& edge_seed);
+
+  std::string name() const override;
+  int dim() const override { return 1; }
+  int body_a() const override { return body_a_; }
+  int body_b() const override { return body_b_; }
+  std::unique_ptr<TermState> MakeState() const override;
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* state, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
+
+ private:
+  void Update(const std::vector<BodyPose>& poses, State* st) const;
+
+  TrimForm form_;
+  int body_a_, body_b_;
+  const nurbs::NurbsSurface* f_;
+  const nurbs::NurbsCurve2d* curve_;
+  const nurbs::NurbsSurface* g_;
+  contact::BodyCurve edge_;
+  Eigen::Vector4d pair_seed_;
+  Eigen::Vector3d edge_seed_;
+};
+
+std::shared_ptr<TrimConstraintTerm> MakeTrimConstraint(TrimForm form, int body_a,
+                                                       const nurbs::NurbsSurface* f,
+                                                       const nurbs::NurbsCurve2d* curve, int body_b,
+                                                       const nurbs::NurbsSurface* g,
+                                                       const Eigen::Vector4d& pair_seed,
+                                                       const Eigen::Vector3d& edge_seed);
+
+}  // namespace tangent::optimizer
