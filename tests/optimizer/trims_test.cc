@@ -11,6 +11,10 @@
 #include <random>
 
 #include "nurbs/primitives.h"
+#include "nurbs/trim.h"
+#include "optimizer/contacts.h"
+#include "optimizer/goals.h"
+#include "optimizer/solver.h"
 
 namespace tangent::optimizer {
 namespace {
@@ -139,6 +143,66 @@ TEST(TrimsTest, TheSignSaysWhichSideOfTheEdgeTheContactIsOn) {
       EXPECT_GT(side * r, 0.0) << ToString(form) << " side " << side;
     }
   }
+}
+
+TEST(TrimsTest, AUnilateralTrimKeepsTheContactOnTheMaterialAndABilateralOneOnTheEdge) {
+  // The patch is the ground; the ball touches it (a floating contact, beta = 0) and a goal pulls
+  // its centre across the trim edge onto the trimmed-away side. Without the trim the contact
+  // follows the goal off the material; with it (r >= 0) the contact stops on the edge; with the
+  // bilateral form (r = 0) it is held on the edge from a start on the material.
+  Mechanism mech;
+  Scene s;
+  const int patch = mech.AddBody(Body{"patch", true});
+  const int ball = mech.AddBody(Body{"ball"});
+  const nurbs::CurvePoint<2> c = s.trim.Evaluate(0.5, 1);
+  const Eigen::Vector2d left = Eigen::Vector2d(-c.C1[1], c.C1[0]).normalized();
+  // The reference material: left of the trim, closed by a polyline round the upper left.
+  const nurbs::NurbsCurve2d closing(nurbs::KnotVector(1, {0, 0, 1, 2, 3, 3}),
+                                    {{0.9, 0.7}, {0.9, 0.95}, {0.1, 0.95}, {0.1, 0.2}});
+  const nurbs::TrimmedDomain material({0, 0}, {1, 1}, nurbs::TrimLoop{{s.trim, closing}}, {});
+  auto centre_over = [&](const Eigen::Vector2d& uv) {
+    const nurbs::SurfacePoint at = s.patch.Evaluate(uv[0], uv[1], 1);
+    return Eigen::Vector3d(at.S + kRadius * at.S_u.cross(at.S_v).normalized());
+  };
+  const Eigen::Vector2d start_uv = c.C + 0.08 * left, target_uv = c.C - 0.15 * left;
+  const Eigen::Quaterniond sideways(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()));
+  Eigen::VectorXd q0(7);
+  q0 << centre_over(start_uv), sideways.w(), sideways.x(), sideways.y(), sideways.z();
+  std::vector<BodyPose> poses;
+  mech.Poses(q0, &poses);
+  const Eigen::Vector4d pair = contact::ClosestSamplePair(
+      s.patch, poses[static_cast<size_t>(patch)], s.ball, poses[static_cast<size_t>(ball)], 31);
+  auto solve = [&](int trim) {  // 0: none, 1: unilateral, 2: bilateral
+    Problem p(mech);
+    const auto touch = MakeSurfaceContact(patch, &s.patch, ball, &s.ball, pair);
+    p.AddEquality(touch);
+    const auto t = MakeTrimConstraint(TrimForm::kParametric, patch, &s.patch, &s.trim, ball,
+                                      &s.ball, pair, Eigen::Vector3d(pair[2], pair[3], 0.5));
+    if (trim == 1) p.AddInequality(t);
+    if (trim == 2) p.AddEquality(t);
+    p.AddObjective(MakePositionGoal({ball, Eigen::Vector3d::Zero()}, centre_over(target_uv)), 1.0);
+    SolverOptions o;
+    o.max_iterations = 200;
+    Solver solver(p, o);
+    Eigen::VectorXd q = q0;
+    const SolveStats st = solver.Solve(&q);
+    EXPECT_TRUE(st.converged) << trim;
+    EXPECT_LE(st.max_violation, 1e-10) << trim;
+    // Where the contact ended: the pair's parameters on the patch.
+    return Eigen::Vector2d(solver.data().Of(*touch).extremum().u.head<2>());
+  };
+  const Eigen::Vector2d free = solve(0), kept = solve(1), held = solve(2);
+  const double d_free = material.Nearest(free).signed_distance;
+  const double d_kept = material.Nearest(kept).signed_distance;
+  const double d_held = material.Nearest(held).signed_distance;
+  std::printf(
+      "contact's parametric distance to the edge: free %.3g, unilateral %.3g, "
+      "bilateral %.3g\n",
+      d_free, d_kept, d_held);
+  EXPECT_LT(d_free, -0.05);           // without the trim: well inside the trimmed-away side
+  EXPECT_GE(d_kept, -1e-9);           // the unilateral trim: on the material ...
+  EXPECT_LT(std::abs(d_kept), 1e-9);  // ... at its edge, where the goal presses it
+  EXPECT_LT(std::abs(d_held), 1e-9);
 }
 
 }  // namespace
