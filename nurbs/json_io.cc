@@ -173,8 +173,15 @@ NurbsSurface SurfaceFromJson(const json& j, const std::string& where) {
 }
 
 template <int Dim>
+NurbsCurve<Dim> CurveAt(const json& j, const Loc& loc);
+
+template <int Dim>
 NurbsCurve<Dim> CurveFromJson(const json& j, const std::string& where) {
-  const Loc loc{where, ""};
+  return CurveAt<Dim>(j, Loc{where, ""});
+}
+
+template <int Dim>
+NurbsCurve<Dim> CurveAt(const json& j, const Loc& loc) {
   CheckType(j, loc, "nurbs_curve");
   const int dim = Integer(Field(j, loc, "dimension"), loc / "dimension");
   if (dim != Dim) {
@@ -205,6 +212,106 @@ NurbsCurve<Dim> CurveFromJson(const json& j, const std::string& where) {
     for (size_t i = 0; i < warr.size(); ++i) w.push_back(Weight(warr[i], wl / i));
   }
   return NurbsCurve<Dim>(std::move(k), pts, w);
+}
+
+namespace {
+
+// One curve of a trimming loop: a 2-D NURBS curve, a polyline or a circle (parameter units).
+NurbsCurve2d TrimCurve(const json& j, const Loc& loc) {
+  const json& type = Field(j, loc, "type");
+  const std::string t = type.is_string() ? type.get<std::string>() : "";
+  if (t == "nurbs_curve") return CurveAt<2>(j, loc);
+  if (t == "polyline") {
+    const Loc pl = loc / "points";
+    const json& arr = Array(Field(j, loc, "points"), pl);
+    if (arr.size() < 2)
+      pl.Fail("a polyline needs at least 2 points, found " + std::to_string(arr.size()));
+    std::vector<Eigen::Vector2d> pts;
+    std::vector<double> knots{0.0};
+    for (size_t i = 0; i < arr.size(); ++i) {
+      pts.push_back(Point<2>(arr[i], pl / i, 1.0));
+      if (i > 0 && pts[i] == pts[i - 1]) (pl / i).Fail("repeats the previous point");
+      knots.push_back(static_cast<double>(i));
+    }
+    knots.push_back(static_cast<double>(arr.size() - 1));
+    return NurbsCurve2d(KnotVector(1, knots), pts);
+  }
+  if (t == "circle") {
+    const Eigen::Vector2d c = Point<2>(Field(j, loc, "center"), loc / "center", 1.0);
+    const double r = Number(Field(j, loc, "radius"), loc / "radius");
+    if (!(r > 0.0)) (loc / "radius").Fail("must be positive");
+    bool clockwise = false;
+    if (j.contains("clockwise")) {
+      if (!j["clockwise"].is_boolean()) (loc / "clockwise").Fail("expected true or false");
+      clockwise = j["clockwise"].get<bool>();
+    }
+    const double w = std::sqrt(0.5), s = clockwise ? -1.0 : 1.0;
+    const double corners[9][2] = {{1, 0},   {1, 1},  {0, 1},  {-1, 1}, {-1, 0},
+                                  {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
+    std::vector<Eigen::Vector2d> pts;
+    for (const auto& k : corners) pts.push_back(c + r * Eigen::Vector2d(k[0], s * k[1]));
+    return NurbsCurve2d(KnotVector(2, {0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1}), pts,
+                        {1, w, 1, w, 1, w, 1, w, 1});
+  }
+  (loc / "type").Fail("expected \"nurbs_curve\", \"polyline\" or \"circle\", found " + type.dump());
+}
+
+TrimLoop TrimLoopAt(const json& j, const Loc& loc) {
+  const json& arr = Array(j, loc);
+  if (arr.empty()) loc.Fail("a loop needs at least one curve");
+  TrimLoop loop;
+  for (size_t i = 0; i < arr.size(); ++i) {
+    try {
+      loop.curves.push_back(TrimCurve(arr[i], loc / i));
+    } catch (const std::invalid_argument& e) {  // (a curve's own checks: knots, weights)
+      (loc / i).Fail(e.what());
+    }
+  }
+  return loop;
+}
+
+}  // namespace
+
+TrimmedDomain TrimFromJson(const json& j, const NurbsSurface& surface, const std::string& where,
+                           std::vector<std::string>* warnings) {
+  const Loc loc{where, ""};
+  if (!j.is_object()) loc.Fail("expected an object, found " + TypeName(j));
+  for (const auto& [key, value] : j.items()) {
+    if (key != "outer" && key != "holes" && key != "band" && key != "comment") {
+      (loc / key).Fail("unknown field (known: outer, holes, band, comment)");
+    }
+  }
+  std::optional<TrimLoop> outer;
+  if (j.contains("outer")) outer = TrimLoopAt(j["outer"], loc / "outer");
+  std::vector<TrimLoop> holes;
+  if (j.contains("holes")) {
+    const json& arr = Array(j["holes"], loc / "holes");
+    for (size_t i = 0; i < arr.size(); ++i) holes.push_back(TrimLoopAt(arr[i], loc / "holes" / i));
+  }
+  if (!outer && holes.empty()) loc.Fail("no loop: give \"outer\" or \"holes\"");
+  TrimOptions options;
+  if (j.contains("band")) {
+    options.band = Number(j["band"], loc / "band");
+    if (!(options.band > 0.0 && options.band < 0.1)) (loc / "band").Fail("must be in (0, 0.1)");
+  }
+  const Eigen::Vector2d lo(surface.knots_u().domain_begin(), surface.knots_v().domain_begin());
+  const Eigen::Vector2d hi(surface.knots_u().domain_end(), surface.knots_v().domain_end());
+  try {
+    return TrimmedDomain(lo, hi, std::move(outer), std::move(holes), options, warnings);
+  } catch (const TrimError& e) {
+    std::string msg = e.what();
+    if (msg.rfind("trim: ", 0) == 0) msg = msg.substr(6);
+    // The loop the message names, as a pointer: "hole k" is /holes/k, the outer loop /outer.
+    Loc at = loc;
+    const size_t hole = msg.find("hole ");
+    const size_t outer_at = msg.find("outer loop");
+    if (hole != std::string::npos && (outer_at == std::string::npos || hole < outer_at)) {
+      at = loc / "holes" / static_cast<size_t>(std::stoul(msg.substr(hole + 5)));
+    } else if (outer_at != std::string::npos) {
+      at = loc / "outer";
+    }
+    at.Fail(msg);
+  }
 }
 
 NurbsSurface ParseSurface(const std::string& text, const std::string& where) {

@@ -7,6 +7,7 @@
 
 #include "nurbs/curve.h"
 #include "nurbs/surface.h"
+#include "nurbs/trim.h"
 
 namespace tangent::nurbs {
 
@@ -28,6 +29,19 @@ NurbsSurface SurfaceFromJson(const nlohmann::json& j, const std::string& where =
 ///  "knots": [...], "control_points": [[...], ...], "weights": [...] (optional), "units"}.
 template <int Dim>
 NurbsCurve<Dim> CurveFromJson(const nlohmann::json& j, const std::string& where = "");
+
+/// A surface's trimming loops (docs/trimming.md, "File format"):
+/// {"outer": [curve, ...] (optional), "holes": [[curve, ...], ...] (optional),
+///  "band": β (optional, relative to the domain's diagonal)}, each curve in the surface's (u, v)
+/// domain: a {"type": "nurbs_curve", "dimension": 2, ...}, a {"type": "polyline", "points":
+/// [[u, v], ...]} or a {"type": "circle", "center": [u, v], "radius": r} (a full rational circle,
+/// counter-clockwise; "clockwise": true for the other way). Validated as TrimmedDomain does;
+/// *warnings (may be null) gets its warnings. @throws ParseError naming the field for a
+/// malformed curve, and the loop and curve for a loop that cannot be used ("where: /holes/1:
+/// hole 1 is not closed: curve 0 ends at ...").
+TrimmedDomain TrimFromJson(const nlohmann::json& j, const NurbsSurface& surface,
+                           const std::string& where = "",
+                           std::vector<std::string>* warnings = nullptr);
 
 /// Parses text, then reads the surface/curve. JSON syntax errors become ParseError too.
 NurbsSurface ParseSurface(const std::string& text, const std::string& where = "");

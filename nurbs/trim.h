@@ -71,9 +71,9 @@ class TrimmedDomain {
   /// domain, not crossing or touching itself or another loop, holes inside the outer loop and
   /// not inside one another; a loop running the wrong way is reversed and *warnings (may be
   /// null) says so. @throws TrimError naming the loop and curve.
-  TrimmedDomain(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi,
-                std::optional<TrimLoop> outer, std::vector<TrimLoop> holes,
-                const TrimOptions& options = {}, std::vector<std::string>* warnings = nullptr);
+  TrimmedDomain(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi, std::optional<TrimLoop> outer,
+                std::vector<TrimLoop> holes, const TrimOptions& options = {},
+                std::vector<std::string>* warnings = nullptr);
 
   /// Whether (u, v) is on the material (the boundary itself counts as material).
   bool Contains(const Eigen::Vector2d& uv) const;

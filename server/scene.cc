@@ -201,7 +201,40 @@ void ParseSurfaces(const Node& root, double unit, const std::string& base_dir, S
       X.translation() =
           unit * n.At("centre_at").Vector<3>() - X.linear() * local.Evaluate(u, v, 0).S;
     }
-    s.surfaces.push_back(SceneSurface{name, b, nurbs::Transformed(local, X), {}, false});
+    s.surfaces.push_back(SceneSurface{name, b, nurbs::Transformed(local, X), {}, false, {}});
+    // Trims: in the entry, or in the NURBS document (a file's or the inline one's).
+    std::optional<nlohmann::json> trim;
+    std::string trim_where = n.where + ": " + n.path + ".trim";
+    if (n.Has("trim")) {
+      trim = n.At("trim").j;
+    } else if (n.String("type", "") == "nurbs") {
+      if (n.Has("nurbs") && n.At("nurbs").Has("trim")) {
+        trim = n.At("nurbs").At("trim").j;
+        trim_where = n.where + ": " + n.path + ".nurbs.trim";
+      } else if (n.Has("file")) {
+        std::filesystem::path p = n.At("file").String();
+        if (p.is_relative()) p = std::filesystem::path(base_dir) / p;
+        std::ifstream in(p);
+        const nlohmann::json doc = nlohmann::json::parse(in, nullptr, false);
+        if (doc.is_object() && doc.contains("trim")) {
+          trim = doc["trim"];
+          trim_where = p.string() + ": /trim";
+        }
+      }
+    }
+    if (trim) {
+      SceneSurface& ss = s.surfaces.back();
+      try {
+        ss.trim = nurbs::TrimFromJson(*trim, ss.surface, trim_where, &s.load_log);
+      } catch (const nurbs::ParseError& e) {
+        throw SceneError(e.what());
+      }
+      const int holes = static_cast<int>(ss.trim->loops().size()) - (ss.trim->has_outer() ? 1 : 0);
+      s.load_log.push_back("surface " + name + ": trimmed (" +
+                           (ss.trim->has_outer() ? "an outer loop, " : "") + std::to_string(holes) +
+                           " hole(s), " + std::to_string(ss.trim->chords().size()) +
+                           " certified chords); contacts do not use trims yet (issue 16)");
+    }
   }
 }
 

@@ -5,6 +5,7 @@
 
 #include <deque>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -13,6 +14,7 @@
 
 #include "nurbs/offset.h"
 #include "nurbs/surface.h"
+#include "nurbs/trim.h"
 #include "optimizer/joints.h"
 #include "optimizer/mechanism.h"
 #include "optimizer/term.h"
@@ -33,6 +35,9 @@ struct SceneSurface {
   nurbs::NurbsSurface surface;  ///< in the body's frame, metres
   nurbs::OffsetMesh mesh;       ///< offset mesh for the global stage (built for declared pairs)
   bool watched = false;         ///< in a declared contact pair
+  /// The material that remains (docs/trimming.md): the surface entry's "trim", or its NURBS
+  /// document's. Validated at load; the servo's contacts do not use it yet (issue 16).
+  std::optional<nurbs::TrimmedDomain> trim;
 };
 
 struct ContactPairSpec {

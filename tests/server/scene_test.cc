@@ -131,3 +131,58 @@ TEST(SceneTest, BadScenesNameTheProblem) {
 
 }  // namespace
 }  // namespace tangent::server
+
+namespace tangent::server {
+namespace {
+
+// A plate (a plane patch, domain [0, 1]²) on a fixed body with the given "trim".
+std::string TrimmedPlate(const std::string& trim) {
+  return R"({"bodies": [{"name": "ground", "fixed": true}, {"name": "b", "mass": 1}],
+    "surfaces": [{"name": "plate", "body": "ground", "type": "plane_patch", "origin": [0, 0, 0],
+                  "edge_u": [0.2, 0, 0], "edge_v": [0, 0.2, 0],
+                  "trim": )" +
+         trim + R"(}], "grasp": {"body": "b"}})";
+}
+
+TEST(SceneTest, TrimsLoadAndBadLoopsNameTheLoop) {
+  const auto s = ParseScene(TrimmedPlate(R"({"holes": [[{"type": "circle", "center": [0.5, 0.5],
+                                                       "radius": 0.2, "clockwise": true}]]})"),
+                            "plate.json");
+  ASSERT_TRUE(s->surfaces[0].trim.has_value());
+  EXPECT_FALSE(s->surfaces[0].trim->Contains({0.5, 0.5}));
+  EXPECT_TRUE(s->surfaces[0].trim->Contains({0.1, 0.1}));
+  // An open loop, crossing loops, a loop outside the domain, a hole outside the outer loop.
+  EXPECT_NE(Error(TrimmedPlate(R"({"holes": [[{"type": "polyline",
+                                                "points": [[0.2, 0.2], [0.4, 0.2], [0.4, 0.4]]}]]})"))
+                .find("surfaces[0].trim: /holes/0: hole 0 is not closed: curve 0 ends at (0.4, "
+                      "0.4) but curve 0 starts at (0.2, 0.2)"),
+            std::string::npos);
+  EXPECT_NE(
+      Error(TrimmedPlate(R"({"holes": [[{"type": "circle", "center": [0.4, 0.5], "radius": 0.15}],
+                                             [{"type": "circle", "center": [0.6, 0.5], "radius": 0.15}]]})"))
+          .find("/holes/1: hole 1 crosses or touches the hole 0"),
+      std::string::npos);
+  EXPECT_NE(Error(TrimmedPlate(
+                      R"({"holes": [[{"type": "circle", "center": [0.95, 0.5], "radius": 0.1}]]})"))
+                .find("/holes/0: hole 0: curve 0 leaves the surface's domain (0, 0) to (1, 1)"),
+            std::string::npos);
+  EXPECT_NE(
+      Error(TrimmedPlate(R"({"outer": [{"type": "circle", "center": [0.3, 0.3], "radius": 0.2}],
+                                   "holes": [[{"type": "circle", "center": [0.8, 0.8], "radius": 0.1}]]})"))
+          .find("/holes/0: hole 0 is not inside the outer loop"),
+      std::string::npos);
+  // Malformed curves and fields.
+  EXPECT_NE(Error(TrimmedPlate(R"({"holes": [[{"type": "spline"}]]})"))
+                .find("/holes/0/0/type: expected \"nurbs_curve\", \"polyline\" or \"circle\""),
+            std::string::npos);
+  EXPECT_NE(Error(TrimmedPlate(
+                      R"({"holes": [[{"type": "circle", "center": [0.5, 0.5], "radius": -1}]]})"))
+                .find("/holes/0/0/radius: must be positive"),
+            std::string::npos);
+  EXPECT_NE(Error(TrimmedPlate(R"({"hole": []})")).find("/hole: unknown field"), std::string::npos);
+  EXPECT_NE(Error(TrimmedPlate(R"({})")).find("no loop: give \"outer\" or \"holes\""),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace tangent::server
