@@ -1,5 +1,7 @@
 #include "nurbs/json_io.h"
 
+#include "nurbs/primitives.h"
+
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -227,14 +229,11 @@ NurbsCurve2d TrimCurve(const json& j, const Loc& loc) {
     if (arr.size() < 2)
       pl.Fail("a polyline needs at least 2 points, found " + std::to_string(arr.size()));
     std::vector<Eigen::Vector2d> pts;
-    std::vector<double> knots{0.0};
     for (size_t i = 0; i < arr.size(); ++i) {
       pts.push_back(Point<2>(arr[i], pl / i, 1.0));
       if (i > 0 && pts[i] == pts[i - 1]) (pl / i).Fail("repeats the previous point");
-      knots.push_back(static_cast<double>(i));
     }
-    knots.push_back(static_cast<double>(arr.size() - 1));
-    return NurbsCurve2d(KnotVector(1, knots), pts);
+    return MakePolyline2d(pts);
   }
   if (t == "circle") {
     const Eigen::Vector2d c = Point<2>(Field(j, loc, "center"), loc / "center", 1.0);
@@ -245,13 +244,7 @@ NurbsCurve2d TrimCurve(const json& j, const Loc& loc) {
       if (!j["clockwise"].is_boolean()) (loc / "clockwise").Fail("expected true or false");
       clockwise = j["clockwise"].get<bool>();
     }
-    const double w = std::sqrt(0.5), s = clockwise ? -1.0 : 1.0;
-    const double corners[9][2] = {{1, 0},   {1, 1},  {0, 1},  {-1, 1}, {-1, 0},
-                                  {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
-    std::vector<Eigen::Vector2d> pts;
-    for (const auto& k : corners) pts.push_back(c + r * Eigen::Vector2d(k[0], s * k[1]));
-    return NurbsCurve2d(KnotVector(2, {0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1}), pts,
-                        {1, w, 1, w, 1, w, 1, w, 1});
+    return MakeCircle2d(c, r, clockwise);
   }
   (loc / "type").Fail("expected \"nurbs_curve\", \"polyline\" or \"circle\", found " + type.dump());
 }

@@ -265,6 +265,23 @@ NurbsSurface MakeShearedPatch(double angle, double size, double bump, bool ratio
   return NurbsSurface(KnotVector(3, k), KnotVector(3, k), pts, w);
 }
 
+NurbsCurve2d MakeCircle2d(const Eigen::Vector2d& center, double radius, bool clockwise) {
+  const double w = std::sqrt(0.5), s = clockwise ? -1.0 : 1.0;
+  const double corners[9][2] = {{1, 0},   {1, 1},  {0, 1},  {-1, 1}, {-1, 0},
+                                {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
+  std::vector<Eigen::Vector2d> points;
+  for (const auto& k : corners) points.push_back(center + radius * Eigen::Vector2d(k[0], s * k[1]));
+  return NurbsCurve2d(KnotVector(2, {0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1}), points,
+                      {1, w, 1, w, 1, w, 1, w, 1});
+}
+
+NurbsCurve2d MakePolyline2d(const std::vector<Eigen::Vector2d>& points) {
+  std::vector<double> knots{0.0};
+  for (size_t i = 0; i < points.size(); ++i) knots.push_back(static_cast<double>(i));
+  knots.push_back(points.empty() ? 0.0 : static_cast<double>(points.size() - 1));
+  return NurbsCurve2d(KnotVector(1, knots), points);
+}
+
 NurbsSurface Transformed(const NurbsSurface& surface, const Eigen::Isometry3d& X) {
   std::vector<Eigen::Vector4d> cpw = surface.weighted_points();
   for (Eigen::Vector4d& h : cpw) {

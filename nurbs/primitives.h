@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "nurbs/curve.h"
 #include "nurbs/surface.h"
 
 namespace tangent::nurbs {
@@ -67,6 +68,12 @@ NurbsSurface MakeHeightGridPatch(double x0, double y0, double lx, double ly,
 /// height `bump` (metres) and, when `rational`, weights varying in [0.95, 1.05]. Size `size`
 /// along both parameter directions; 5 x 5 control points, one interior knot each way.
 NurbsSurface MakeShearedPatch(double angle, double size, double bump, bool rational);
+
+/// Parameter-domain curves for trimming loops (trim.h): the exact rational quadratic circle
+/// (9 control points, t ∈ [0, 1] from angle 0, counter-clockwise unless `clockwise`), and a
+/// polyline as one degree-1 curve (its vertices at the integer parameters, C⁰ knots).
+NurbsCurve2d MakeCircle2d(const Eigen::Vector2d& center, double radius, bool clockwise = false);
+NurbsCurve2d MakePolyline2d(const std::vector<Eigen::Vector2d>& points);
 
 /// The surface moved rigidly by X (points x ↦ X x): NURBS are invariant under affine maps of
 /// their control points, so this is exact (the weights stay). For placing primitives on bodies.

@@ -5,6 +5,8 @@
 
 #include "nurbs/trim.h"
 
+#include "nurbs/primitives.h"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -17,25 +19,10 @@ namespace {
 using ::testing::HasSubstr;
 using V = Eigen::Vector2d;
 
-// The exact rational quadratic circle (9 control points), counter-clockwise from angle a0.
 NurbsCurve2d Circle(const V& centre, double r, bool clockwise = false) {
-  const double w = std::sqrt(0.5);
-  std::vector<V> p;
-  const double s = clockwise ? -1.0 : 1.0;
-  const V corners[9] = {{1, 0},   {1, 1},  {0, 1},  {-1, 1}, {-1, 0},
-                        {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
-  for (const V& c : corners) p.push_back(centre + r * V(c[0], s * c[1]));
-  return NurbsCurve2d(KnotVector(2, {0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1}), p,
-                      {1, w, 1, w, 1, w, 1, w, 1});
+  return MakeCircle2d(centre, r, clockwise);
 }
-
-// A polyline as one degree-1 curve (its vertices are C⁰ knots).
-NurbsCurve2d Polyline(const std::vector<V>& points) {
-  std::vector<double> knots{0.0};
-  for (size_t i = 0; i < points.size(); ++i) knots.push_back(static_cast<double>(i));
-  knots.push_back(static_cast<double>(points.size() - 1));
-  return NurbsCurve2d(KnotVector(1, knots), points);
-}
+NurbsCurve2d Polyline(const std::vector<V>& points) { return MakePolyline2d(points); }
 
 TrimLoop Loop(std::vector<NurbsCurve2d> curves) { return TrimLoop{std::move(curves)}; }
 
