@@ -33,6 +33,7 @@
 #include "contact/placed.h"
 #include "nurbs/curve.h"
 #include "nurbs/surface.h"
+#include "nurbs/trim.h"
 #include "optimizer/term.h"
 
 namespace tangent::optimizer {
@@ -78,6 +79,63 @@ class TrimConstraintTerm final : public Term {
   contact::BodyCurve edge_;
   Eigen::Vector4d pair_seed_;
   Eigen::Vector3d edge_seed_;
+};
+
+/// The signed distance β between a trimmed surface f (body a) and a surface g (body b) that
+/// measures only f's material (docs/trimming.md, "Contacts at trims"), one row; as an inequality
+/// β ≥ 0 it is non-penetration against the part that exists. While the contact's extremal point
+/// u_e on f lies on the material, β is the face contact's (as SurfaceContactTerm). When u_e
+/// leaves the material the contact becomes an edge contact: β is the signed distance between
+/// the trim edge E(τ) = f(c(τ)) nearest u_e (its loop and curve from TrimmedDomain::Nearest)
+/// and g, at their curve–surface extremum, (E − G)·n_g. The switch is continuous: where u_e
+/// crosses the edge, the face's extremal point is on the edge and is the edge's extremum too
+/// (d ⟂ f's tangent plane, so d·E' = 0), so both forms give the same β there. Either way
+///   ∇β = n·(∂p_a/∂q − ∂p_b/∂q) at fixed parameters
+/// (the free parameters are stationary), n the direction the extremum measures β along.
+class TrimmedContactTerm final : public Term {
+ public:
+  struct State final : TermState {
+    Eigen::Vector4d pair;                   ///< the face contact's tracked (u, v, s, t)
+    Eigen::Vector3d edge;                   ///< the edge contact's tracked (s, t, τ)
+    bool on_edge = false;                   ///< the last evaluation measured the edge
+    int loop = -1, curve = -1, piece = -1;  ///< the edge measured: loop, curve, smooth piece
+    int64_t switches = 0;                   ///< face → edge and edge → face changes
+    Vector7d q_a, q_b;
+    bool valid = false;
+    contact::SurfaceSurfaceExtremum pair_ext;
+    contact::SurfacePairEval pair_eval;
+    contact::CurveSurfaceExtremum edge_ext;
+    contact::CurveSurfaceEval edge_eval;
+  };
+  /// The surfaces and the trim must outlive the term.
+  TrimmedContactTerm(int body_a, const nurbs::NurbsSurface* f, const nurbs::TrimmedDomain* trim,
+                     int body_b, const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed);
+
+  std::string name() const override { return "trimmed_contact"; }
+  int dim() const override { return 1; }
+  int body_a() const override { return body_a_; }
+  int body_b() const override { return body_b_; }
+  std::unique_ptr<TermState> MakeState() const override;
+  void Evaluate(const std::vector<BodyPose>& poses, TermState* state, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
+
+ private:
+  void Update(const std::vector<BodyPose>& poses, State* st) const;
+
+  int body_a_, body_b_;
+  const nurbs::NurbsSurface* f_;
+  const nurbs::TrimmedDomain* trim_;
+  const nurbs::NurbsSurface* g_;
+  Eigen::Vector4d seed_;
+  /// Each loop's curves cut at their C⁰ knots (a polyline's vertices) into smooth pieces, in
+  /// order round the loop, over the curves' own parameters: the edge's extremal Newton runs on
+  /// one smooth piece; when its extremum stops at a piece's end it walks on to the neighbour,
+  /// and it stays at a corner only where both neighbours put it there.
+  struct Piece {
+    int curve = 0;
+    nurbs::NurbsCurve2d c;
+  };
+  std::vector<std::vector<Piece>> pieces_;
 };
 
 std::shared_ptr<TrimConstraintTerm> MakeTrimConstraint(TrimForm form, int body_a,

@@ -1,7 +1,9 @@
 // The three trimming constraints of seed 001 §3.4: their values (the sides of the edge) and
 // their analytic Jacobians, through the contact's and the edge's extremal Jacobians, against
 // central differences of re-solved values, on a strongly non-orthogonal rational patch trimmed by
-// a curved rational cubic, with a ball over the edge, quaternions off the unit sphere.
+// a curved rational cubic, with a ball over the edge, quaternions off the unit sphere; and the
+// trimmed contact (face or rim of a hole): its Jacobians, its continuity across the rim and its
+// value over the hole against the ball's distance to the rim.
 
 #include "optimizer/trims.h"
 
@@ -203,6 +205,120 @@ TEST(TrimsTest, AUnilateralTrimKeepsTheContactOnTheMaterialAndABilateralOneOnThe
   EXPECT_GE(d_kept, -1e-9);           // the unilateral trim: on the material ...
   EXPECT_LT(std::abs(d_kept), 1e-9);  // ... at its edge, where the goal presses it
   EXPECT_LT(std::abs(d_held), 1e-9);
+}
+
+// A plate (the sheared rational patch) with a round hole in its domain, and the ball.
+struct HoleScene : Scene {
+  nurbs::TrimmedDomain plate{{0, 0},
+                             {1, 1},
+                             std::nullopt,
+                             {nurbs::TrimLoop{{nurbs::MakeCircle2d({0.5, 0.5}, 0.2, true)}}}};
+};
+
+// The ball's centre over the patch point (u, v) at `height` above it (along the normal),
+// turned sideways, both bodies as Place does but without the random tilt.
+Eigen::VectorXd Over(const Scene& s, const Eigen::Vector2d& uv, double height) {
+  const nurbs::SurfacePoint at = s.patch.Evaluate(uv[0], uv[1], 1);
+  const Eigen::Vector3d normal = at.S_u.cross(at.S_v).normalized();
+  const Eigen::Quaterniond sideways(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()));
+  Eigen::VectorXd q(14);
+  q << 0, 0, 0, 1, 0, 0, 0, at.S + height * normal, sideways.w(), sideways.x(), sideways.y(),
+      sideways.z();
+  return q;
+}
+
+TEST(TrimsTest, ATrimmedContactMeasuresTheRimOverAHoleWithExactJacobians) {
+  HoleScene s;
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  double worst[2] = {0.0, 0.0};
+  for (int trial = 0; trial < 12; ++trial) {
+    // Over the hole near its rim (the edge form) or over the plate (the face form), well away
+    // from the switch so that ±h stays on one side.
+    const bool over_hole = trial % 2 == 0;
+    const double angle = 2 * M_PI * (trial + 0.3 * u(rng)) / 12;
+    const double radius = over_hole ? 0.15 + 0.03 * u(rng) : 0.3 + 0.05 * u(rng);
+    const Eigen::Vector2d uv =
+        Eigen::Vector2d(0.5, 0.5) + radius * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    Eigen::VectorXd q = Over(s, uv, kRadius + 0.003 * u(rng));
+    q.segment<4>(3) *= 1.1;  // quaternions off the unit sphere
+    q.segment<4>(10) *= 0.9;
+    std::vector<BodyPose> poses;
+    s.mech.Poses(q, &poses);
+    const auto term = std::make_shared<TrimmedContactTerm>(
+        s.patch_body, &s.patch, &s.plate, s.ball_body, &s.ball,
+        contact::ClosestSamplePair(s.patch, poses[0], s.ball, poses[1], 31));
+    const auto state = term->MakeState();
+    Eigen::Matrix<double, 1, 14> g;
+    const double beta = Value(s.mech, *term, state.get(), q, &g);
+    const auto& st = static_cast<const TrimmedContactTerm::State&>(*state);
+    ASSERT_EQ(st.on_edge, over_hole) << trial;
+    EXPECT_LT(std::abs(beta), 0.02);
+    for (int k = 0; k < 14; ++k) {
+      Eigen::VectorXd qp = q, qm = q;
+      qp[k] += kH;
+      qm[k] -= kH;
+      const double fd = (Value(s.mech, *term, state.get(), qp, nullptr) -
+                         Value(s.mech, *term, state.get(), qm, nullptr)) /
+                        (2 * kH);
+      worst[over_hole] = std::max(worst[over_hole], std::abs(fd - g[k]));
+      EXPECT_NEAR(fd, g[k], 1e-7) << (over_hole ? "edge" : "face") << " trial " << trial << " q"
+                                  << k;
+    }
+  }
+  std::printf("largest |J − FD|: face %.2e, edge %.2e\n", worst[0], worst[1]);
+}
+
+TEST(TrimsTest, ATrimmedContactIsContinuousAcrossTheRim) {
+  // The ball slid in 2e-5 m steps from over the plate to over the hole and back: β is a distance,
+  // 1-Lipschitz in the ball's translation, so no step may change it by more than the step —
+  // across the switches from the face to the edge too.
+  HoleScene s;
+  const Eigen::Vector2d from(0.5, 0.88), to(0.5, 0.55);
+  const Eigen::VectorXd q0 = Over(s, from, kRadius + 0.001), q1 = Over(s, to, kRadius + 0.001);
+  std::vector<BodyPose> poses;
+  s.mech.Poses(q0, &poses);
+  const auto term = std::make_shared<TrimmedContactTerm>(
+      s.patch_body, &s.patch, &s.plate, s.ball_body, &s.ball,
+      contact::ClosestSamplePair(s.patch, poses[0], s.ball, poses[1], 31));
+  const auto state = term->MakeState();
+  const double length = (q1.segment<3>(7) - q0.segment<3>(7)).norm();
+  const int n = static_cast<int>(length / 2e-5);
+  double worst = 0.0, prev = Value(s.mech, *term, state.get(), q0, nullptr), lowest = prev;
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int k = 1; k <= n; ++k) {
+      const double t = pass == 0 ? static_cast<double>(k) / n : 1.0 - static_cast<double>(k) / n;
+      Eigen::VectorXd q = q0;
+      q.segment<3>(7) = (1 - t) * q0.segment<3>(7) + t * q1.segment<3>(7);
+      const double beta = Value(s.mech, *term, state.get(), q, nullptr);
+      const double step = length / n;
+      worst = std::max(worst, std::abs(beta - prev) / step);
+      lowest = std::min(lowest, beta);
+      prev = beta;
+    }
+  }
+  const auto& st = static_cast<const TrimmedContactTerm::State&>(*state);
+  Value(s.mech, *term, state.get(), q1, nullptr);
+  const double over_hole = Value(s.mech, *term, state.get(), q1, nullptr);
+  std::printf(
+      "%d steps each way, %lld switches, largest |dbeta| / step %.4f, beta over the "
+      "plate %.4f, over the hole %.4f\n",
+      n, static_cast<long long>(st.switches), worst, lowest, over_hole);
+  EXPECT_GE(st.switches, 2);
+  EXPECT_LE(worst, 1.0 + 1e-6);
+  // Over the hole the nearest material is the rim: β is the ball's distance to the rim curve,
+  // against a dense sampling of it (10^5 points: its own error ≤ 1e-9 m here).
+  std::vector<BodyPose> at_end;
+  s.mech.Poses(q1, &at_end);
+  double nearest = 1e300;
+  const nurbs::NurbsCurve2d& rim = s.plate.loops()[0].curves[0];
+  for (int k = 0; k <= 100000; ++k) {
+    const Eigen::Vector2d c = rim.Evaluate(k / 100000.0, 0).C;
+    nearest = std::min(
+        nearest,
+        (at_end[0].Point(s.patch.Evaluate(c[0], c[1], 0).S) - at_end[1].q.head<3>()).norm());
+  }
+  EXPECT_NEAR(over_hole, nearest - kRadius, 1e-8);
 }
 
 }  // namespace
