@@ -307,6 +307,25 @@ TrimmedDomain TrimFromJson(const json& j, const NurbsSurface& surface, const std
   }
 }
 
+json ToJson(const TrimmedDomain& trim) {
+  json j = json::object();
+  auto loop = [](const TrimLoop& l) {
+    json curves = json::array();
+    for (const NurbsCurve2d& c : l.curves) curves.push_back(ToJson(c));
+    return curves;
+  };
+  const std::vector<TrimLoop>& loops = trim.loops();
+  size_t first_hole = 0;
+  if (trim.has_outer()) {
+    j["outer"] = loop(loops[0]);
+    first_hole = 1;
+  }
+  json holes = json::array();
+  for (size_t i = first_hole; i < loops.size(); ++i) holes.push_back(loop(loops[i]));
+  if (!holes.empty()) j["holes"] = holes;
+  return j;
+}
+
 NurbsSurface ParseSurface(const std::string& text, const std::string& where) {
   return SurfaceFromJson(ParseText(text, where), where);
 }

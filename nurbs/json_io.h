@@ -43,6 +43,10 @@ TrimmedDomain TrimFromJson(const nlohmann::json& j, const NurbsSurface& surface,
                            const std::string& where = "",
                            std::vector<std::string>* warnings = nullptr);
 
+/// The loops in TrimFromJson's form, every curve as a "nurbs_curve" (after any reversal the
+/// domain made).
+nlohmann::json ToJson(const TrimmedDomain& trim);
+
 /// Parses text, then reads the surface/curve. JSON syntax errors become ParseError too.
 NurbsSurface ParseSurface(const std::string& text, const std::string& where = "");
 template <int Dim>
