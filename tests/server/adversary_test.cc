@@ -464,11 +464,19 @@ Delta Corrupted(const char* what, int every,
 TEST(Adversary, A00_BaselineClientIsServed) {
   Harness& h = *g_h;
   const size_t from = h.WrenchCount();
+  h.ResetGap();
   h.Hold(h.session, 2.0);  // past the 1 s ramp
   const tangent::loop_stats_t s = h.FreshStats();
+  // (Set first: the attacks below compare against it whatever happens here.)
+  h.baseline_contacts = s.num_contacts;
   h.CheckWrenches(from, "baseline");
   const std::vector<Received> w = h.WrenchesSince(from);
-  ASSERT_GT(w.size(), 1800u);
+  // 2000 states sent over 2 s: nine in ten answered, unless the client itself was descheduled
+  // for half a device timeout or more (a busy machine), when every state it did send counts.
+  const double pause_ms = 1e-6 * static_cast<double>(h.max_gap_ns());
+  std::printf("[baseline] the client's longest pause between states: %.1f ms\n", pause_ms);
+  ASSERT_FALSE(w.empty());
+  EXPECT_GT(w.size(), pause_ms < 0.5 * 1e3 * kDeviceTimeout ? 1800u : 1000u);
   const Eigen::Vector3d f(w.back().w.force[0], w.back().w.force[1], w.back().w.force[2]);
   std::printf("[baseline] %zu answers, |F| %.3f N, contacts %d, violation %.1e\n", w.size(),
               f.norm(), s.num_contacts, s.max_violation);
@@ -478,7 +486,6 @@ TEST(Adversary, A00_BaselineClientIsServed) {
   EXPECT_EQ(w.back().w.state, 0);
   EXPECT_EQ(s.sessions, 1);
   EXPECT_LE(s.max_violation, 1e-6);
-  h.baseline_contacts = s.num_contacts;
   EXPECT_GE(h.baseline_contacts, 1);
 }
 
