@@ -1,6 +1,7 @@
 #include "server/scene.h"
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -12,6 +13,9 @@
 #include <nlohmann/json.hpp>
 
 #include "base/json_node.h"
+#ifdef TANGENT_WITH_CAD
+#include "cad/import.h"
+#endif
 #include "nurbs/json_io.h"
 #include "nurbs/primitives.h"
 #include "optimizer/goals.h"
@@ -235,6 +239,50 @@ void ParseSurfaces(const Node& root, double unit, const std::string& base_dir, S
                            " hole(s), " + std::to_string(ss.trim->chords().size()) +
                            " certified chords); contacts do not use trims yet (issue 16)");
     }
+  }
+}
+
+// Bodies made of a CAD part (docs/cad.md): every face of the file a trimmed surface on the body,
+// its coordinates taken in the body's frame (metres, whatever the file's unit).
+void ParseCadBodies(const Node& root, const std::string& base_dir, Scene* out) {
+  Scene& s = *out;
+  const Node bodies = root.At("bodies");
+  for (size_t i = 0; i < bodies.Size(); ++i) {
+    const Node b = bodies.At(i);
+    if (!b.Has("cad")) continue;
+#ifndef TANGENT_WITH_CAD
+    (void)base_dir;
+    b.At("cad").Fail("this build has no CAD import (configure with -DTANGENT_WITH_OCCT=ON)");
+#else
+    std::filesystem::path p = b.At("cad").String();
+    if (p.is_relative()) p = std::filesystem::path(base_dir) / p;
+    cad::ImportedPart part;
+    try {
+      part = cad::ImportCad(p.string());
+    } catch (const cad::ImportError& e) {
+      b.At("cad").Fail(e.what());
+    }
+    const std::string body = b.At("name").String();
+    const int index = s.BodyIndex(body);
+    int faces = 0;
+    for (const cad::ImportedBody& ib : part.bodies) {
+      for (const cad::ImportedFace& f : ib.faces) {
+        const std::string name = body + "/" + f.name;
+        if (s.SurfaceIndex(name) >= 0) b.At("cad").Fail("duplicate surface name \"" + name + "\"");
+        s.surfaces.push_back(SceneSurface{name, index, f.surface, {}, false, f.trim});
+        ++faces;
+      }
+    }
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "body %s: %d faces from %s (%d skipped, largest deviation from Open CASCADE "
+                  "%.2g m)",
+                  body.c_str(), faces, p.string().c_str(), part.report.skipped,
+                  part.report.largest_deviation);
+    s.load_log.emplace_back(line);
+    for (const std::string& w : part.report.warnings)
+      s.load_log.push_back("body " + body + ": " + w);
+#endif
   }
 }
 
@@ -470,6 +518,7 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
 
   ParseBodies(root, unit, &s);
   ParseSurfaces(root, unit, base_dir, &s);
+  ParseCadBodies(root, base_dir, &s);
   ParseJoints(root, unit, &s);
   ParsePairs(root, &s);
   ParseGrasp(root, unit, &s);

@@ -377,3 +377,34 @@ TEST(ImportTest, TangentImportWritesASceneThatLoadsWithItsTrims) {
 
 }  // namespace
 }  // namespace tangent::cad
+
+namespace tangent::cad {
+namespace {
+
+TEST(ImportTest, ASceneBodyTakesItsFacesFromACadFile) {
+  const std::string part = Write(PlateWithHoles(), "scene_plate", true);
+  const std::string text = R"({"bodies": [{"name": "plate", "fixed": true, "cad": ")" + part +
+                           R"("}, {"name": "b", "mass": 1}], "surfaces": [],
+                               "grasp": {"body": "b"}})";
+  const auto s = server::ParseScene(text, "parts.json", Dir());
+  ASSERT_EQ(s->surfaces.size(), 8u);  // the box's six faces less the two cut through, 2 walls
+  for (const server::SceneSurface& f : s->surfaces) {
+    EXPECT_EQ(f.body, 0);
+    EXPECT_TRUE(f.trim.has_value());
+    EXPECT_EQ(f.name.rfind("plate/solid 0 face ", 0), 0u) << f.name;
+  }
+  EXPECT_NE(s->load_log[0].find("body plate: 8 faces from"), std::string::npos) << s->load_log[0];
+  try {
+    server::ParseScene(R"({"bodies": [{"name": "plate", "fixed": true, "cad": "nowhere.step"},
+                                      {"name": "b", "mass": 1}], "surfaces": [],
+                           "grasp": {"body": "b"}})",
+                       "parts.json", Dir());
+    ADD_FAILURE() << "accepted";
+  } catch (const server::SceneError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("parts.json: bodies[0].cad:"));
+    EXPECT_THAT(e.what(), HasSubstr("nowhere.step: no such file"));
+  }
+}
+
+}  // namespace
+}  // namespace tangent::cad
