@@ -784,10 +784,9 @@ void Flood(double rate_hz, const char* what) {
     });
     seconds = 1e-9 * static_cast<double>(NowNs() - t0);
   });
-  // Exact accounting over the attack and its settle (± the few states in flight when each
-  // snapshot was taken: the client keeps sending while it waits for one): every state sent was
-  // accepted or counted lost (a gap in seq); every accepted state was answered or counted
-  // unanswered.
+  // Accounting over the attack and its settle, up to the states in flight when each snapshot was
+  // taken (the client keeps sending while it waits for one): every state sent was accepted or
+  // counted lost (a gap in seq); every accepted state was answered or counted unanswered.
   const int64_t sent = d.sent;
   std::printf(
       "[%s] %lld states in %.2f s (%.0f per second), %lld in all with the settle; "
@@ -797,9 +796,14 @@ void Flood(double rate_hz, const char* what) {
       static_cast<long long>(d.lost), static_cast<long long>(d.wrenches),
       static_cast<long long>(d.unanswered));
   EXPECT_NEAR(static_cast<double>(d.accepted + d.lost), static_cast<double>(sent), 10.0);
-  // (Timeout wrenches answer no state: not counted.)
-  EXPECT_NEAR(static_cast<double>(d.wrenches - d.timeout_wrenches + d.unanswered),
-              static_cast<double>(d.accepted), 2.0);
+  // (Timeout wrenches answer no state: not counted.) The bridge counts a state accepted when it
+  // passes the filter, the servo answered or unanswered when a tick takes it, so the counters
+  // differ by the states in flight when the snapshot is taken: ±2 normally, more when the servo
+  // was descheduled then (CI: 12). Fewer than a device timeout's worth of the settle's 1 kHz
+  // states can be in flight without a timeout, and none may be answered twice.
+  const double handled = static_cast<double>(d.wrenches - d.timeout_wrenches + d.unanswered);
+  EXPECT_LE(handled, static_cast<double>(d.accepted) + 2.0);
+  EXPECT_GE(handled, static_cast<double>(d.accepted) - 2.0 - 1e3 * kDeviceTimeout);
   EXPECT_GT(d.wrenches, 4000);  // still serving through the flood
   ExpectOnly(d, 0, 0, 0, 0, 0, /*may_lose=*/true);
 }
