@@ -84,6 +84,7 @@ void Solver::Reset() {
   mu_ = options_.penalty;
   if (B_.size()) B_.setZero();
   have_old_ = false;
+  bfgs_scaled_ = false;
   fd_curvature_ = false;
   last_step_ = 0.0;
 }
@@ -97,12 +98,18 @@ void Solver::UpdateDesignCurvature(const Eigen::VectorXd& q) {
     const Eigen::VectorXd y = gd_ - gd_old_;
     const double ss = s.squaredNorm(), sy = s.dot(y);
     if (ss > 0.0 && std::isfinite(sy)) {
-      if (B_.isZero(0.0)) {
-        // The first model: a multiple of the identity with the curvature seen along s
-        // (Nocedal & Wright's scaling), or the first step's own scale.
+      if (!bfgs_scaled_) {
+        // The first update replaces the first step's guess by a multiple of the identity with
+        // the curvature seen along s (Nocedal & Wright's scaling). (It used to test B for zero,
+        // which the first step's guess never is: the guess, g/0.05, stayed and kept the steps
+        // short — the adjustable-link finger crept for 55 iterations at full-length steps.)
         const double yy = y.squaredNorm();
         const double b = sy > 0.0 ? yy / sy : std::sqrt(yy / ss);
-        B_.diagonal().setConstant(b > 0.0 ? b : 1.0);
+        if (b > 0.0 && std::isfinite(b)) {
+          B_.setZero();
+          B_.diagonal().setConstant(b);
+        }
+        bfgs_scaled_ = true;
       }
       const Eigen::VectorXd Bs = B_ * s;
       const double sBs = s.dot(Bs);
