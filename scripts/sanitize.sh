@@ -19,6 +19,7 @@ TANGENT_BUILD_DIR=build-asan bash scripts/build.sh -DCMAKE_BUILD_TYPE=RelWithDeb
 # through the sanitizer's operator new[] and free through ours (free), a mismatch in name only.
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1:alloc_dealloc_mismatch=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp"
 cd build-asan
 if [ $# -eq 0 ]; then set -- -E "server_integration|server_adversary"; fi
 ctest --output-on-failure --parallel "$(nproc)" --timeout 1200 "$@"
