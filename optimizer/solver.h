@@ -194,7 +194,7 @@ class Solver {
   Eigen::MatrixXd B_;
   Eigen::VectorXd gd_, gd_old_, q_old_;
   bool have_old_ = false;
-  bool bfgs_scaled_ = false;  ///< the first BFGS update has rescaled the initial model
+  bool bfgs_scaled_ = false;   ///< the first BFGS update has rescaled the initial model
   bool fd_curvature_ = false;  ///< after a stall: B by differences of the design gradient
   double stall_kkt_ = 0.0;     ///< the KKT residual at the last halving (stall detection)
   double last_step_ = 0.0;     ///< |Δq| of the last step taken
