@@ -4,7 +4,6 @@
 #include "nurbs/trim.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Polygon_2_algorithms.h>
 
 #include <algorithm>
 #include <cmath>
@@ -298,16 +297,10 @@ TrimmedDomain::TrimmedDomain(const Eigen::Vector2d& lo, const Eigen::Vector2d& h
     }
   }
   if (reversed) certify();
-  for (const Chord& c : chords_) max_band_ = std::max(max_band_, c.band);
 
   // 6. Nesting (no crossings now): holes inside the outer loop, not inside one another.
   auto inside_loop = [&](int l, const Eigen::Vector2d& x) {
-    std::vector<P2> polygon;
-    for (int c : loop_chords_[static_cast<size_t>(l)]) {
-      polygon.push_back(ToP2(chords_[static_cast<size_t>(c)].a));
-    }
-    return CGAL::bounded_side_2(polygon.begin(), polygon.end(), ToP2(x), Kernel()) !=
-           CGAL::ON_UNBOUNDED_SIDE;
+    return Side(l, x) != CGAL::ON_UNBOUNDED_SIDE;
   };
   const int first_hole = has_outer_ ? 1 : 0;
   for (int h = first_hole; h < num_loops; ++h) {
@@ -325,16 +318,33 @@ TrimmedDomain::TrimmedDomain(const Eigen::Vector2d& lo, const Eigen::Vector2d& h
   }
 }
 
-bool TrimmedDomain::PolygonContains(const Eigen::Vector2d& uv) const {
+int TrimmedDomain::Side(int loop, const Eigen::Vector2d& uv) const {
+  // The winding number of the loop's chords about uv with CGAL's exact orientation predicate
+  // (the y comparisons are exact on doubles): the exact answer for the polygon of the chords'
+  // double vertices, allocation free.
   const P2 p = ToP2(uv);
-  std::vector<P2> polygon;
-  for (int l = 0; l < static_cast<int>(loops_.size()); ++l) {
-    polygon.clear();
-    for (int c : loop_chords_[static_cast<size_t>(l)]) {
-      polygon.push_back(ToP2(chords_[static_cast<size_t>(c)].a));
+  int winding = 0;
+  for (int c : loop_chords_[static_cast<size_t>(loop)]) {
+    const Chord& e = chords_[static_cast<size_t>(c)];
+    const P2 a = ToP2(e.a), b = ToP2(e.b);
+    const CGAL::Orientation o = CGAL::orientation(a, b, p);
+    if (o == CGAL::COLLINEAR && std::min(e.a[0], e.b[0]) <= uv[0] &&
+        uv[0] <= std::max(e.a[0], e.b[0]) && std::min(e.a[1], e.b[1]) <= uv[1] &&
+        uv[1] <= std::max(e.a[1], e.b[1])) {
+      return CGAL::ON_BOUNDARY;
     }
-    const CGAL::Bounded_side side =
-        CGAL::bounded_side_2(polygon.begin(), polygon.end(), p, Kernel());
+    if (e.a[1] <= uv[1]) {
+      if (e.b[1] > uv[1] && o == CGAL::LEFT_TURN) ++winding;
+    } else if (e.b[1] <= uv[1] && o == CGAL::RIGHT_TURN) {
+      --winding;
+    }
+  }
+  return winding != 0 ? CGAL::ON_BOUNDED_SIDE : CGAL::ON_UNBOUNDED_SIDE;
+}
+
+bool TrimmedDomain::PolygonContains(const Eigen::Vector2d& uv) const {
+  for (int l = 0; l < static_cast<int>(loops_.size()); ++l) {
+    const int side = Side(l, uv);
     if (has_outer_ && l == 0) {
       if (side == CGAL::ON_UNBOUNDED_SIDE) return false;
     } else if (side == CGAL::ON_BOUNDED_SIDE) {
@@ -426,8 +436,9 @@ bool TrimmedDomain::OnMaterialSide(const Closest& c, const Eigen::Vector2d& uv) 
     t_out = out.Evaluate(out.knots().domain_begin(), 1).C1;
   } else {
     t_in = t_out = f.Evaluate(c.t, 1).C1;
-    for (double knot : f.knots().Breakpoints()) {
-      if (std::abs(knot - c.t) <= eps && f.knots().Multiplicity(knot) >= f.degree()) {
+    for (double knot : f.knots().knots()) {  // (the stored knots: no allocation)
+      if (knot > t_lo && knot < t_hi && std::abs(knot - c.t) <= eps &&
+          f.knots().Multiplicity(knot) >= f.degree()) {
         t_in = f.Evaluate(knot - eps, 1).C1;
         t_out = f.Evaluate(knot, 1).C1;  // (a knot evaluates on its right span)
       }
@@ -443,17 +454,16 @@ TrimmedDomain::Closest TrimmedDomain::Nearest(const Eigen::Vector2d& uv) const {
   if (chords_.empty() || !uv.allFinite()) return best;
   // The closest curve point of a chord's piece lies within its band of the chord's distance:
   // only chords that can beat the best upper bound are refined on the curve.
-  std::vector<double> d(chords_.size()), s(chords_.size());
+  // (Two passes over the chords, the distances computed again in the second: no allocation.)
   double bound = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i < chords_.size(); ++i) {
-    d[i] = PointSegmentDistance(uv, chords_[i].a, chords_[i].b, &s[i]);
-    bound = std::min(bound, d[i] + chords_[i].band);
+  for (const Chord& c : chords_) {
+    bound = std::min(bound, PointSegmentDistance(uv, c.a, c.b) + c.band);
   }
   double nearest = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i < chords_.size(); ++i) {
-    const Chord& c = chords_[i];
-    if (d[i] - c.band > bound) continue;
-    const Closest r = RefineOn(c.loop, c.curve, c.t0 + s[i] * (c.t1 - c.t0), uv);
+  for (const Chord& c : chords_) {
+    double s = 0.0;
+    if (PointSegmentDistance(uv, c.a, c.b, &s) - c.band > bound) continue;
+    const Closest r = RefineOn(c.loop, c.curve, c.t0 + s * (c.t1 - c.t0), uv);
     if (r.signed_distance < nearest) {
       nearest = r.signed_distance;
       best = r;

@@ -75,7 +75,9 @@ class TrimmedDomain {
                 std::vector<TrimLoop> holes, const TrimOptions& options = {},
                 std::vector<std::string>* warnings = nullptr);
 
-  /// Whether (u, v) is on the material (the boundary itself counts as material).
+  /// Whether (u, v) is on the material (the boundary itself counts as material). Allocation
+  /// free, as is Nearest (TrimmedContactTerm calls both inside a solve) — save where CGAL's
+  /// filtered predicate falls back to exact arithmetic on a point within rounding of a chord.
   bool Contains(const Eigen::Vector2d& uv) const;
   /// The closest point of the loops to (u, v) and the signed distance to it.
   Closest Nearest(const Eigen::Vector2d& uv) const;
@@ -90,6 +92,9 @@ class TrimmedDomain {
   std::string LoopName(int loop) const;
 
  private:
+  /// Where uv lies against loop `loop`'s polygon of chords, exactly: CGAL's Bounded_side
+  /// (inside, on the boundary or outside) as an int. Allocation free.
+  int Side(int loop, const Eigen::Vector2d& uv) const;
   /// The polygon's verdict for a point farther than every chord's band from it.
   bool PolygonContains(const Eigen::Vector2d& uv) const;
   /// Newton on curve (loop, curve) for the point closest to uv, from parameter t.
@@ -102,7 +107,6 @@ class TrimmedDomain {
   std::vector<TrimLoop> loops_;
   std::vector<Chord> chords_;
   std::vector<std::vector<int>> loop_chords_;  ///< per loop, its chords in order
-  double max_band_ = 0.0;
 };
 
 }  // namespace tangent::nurbs

@@ -6,6 +6,7 @@
 #include "nurbs/trim.h"
 
 #include "nurbs/primitives.h"
+#include "testing/alloc_counter.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -212,6 +213,29 @@ TEST(TrimTest, HolesGivenCounterClockwiseAreReversedWithAWarning) {
   EXPECT_TRUE(d.Contains(V(0.05, 0.05)));
   EXPECT_FALSE(d.Contains(V(1.5, 0.5)));  // off the domain
   EXPECT_NEAR(d.Nearest(V(0.5, 0.5)).signed_distance, -0.2, 1e-14);
+}
+
+TEST(TrimTest, ClassifyingAndMeasuringAllocateNothing) {
+  // TrimmedContactTerm calls Contains and Nearest inside a solve (Term::Evaluate's contract:
+  // allocation free), near the boundary and far from it; the counter's positive control is in
+  // no_allocation_test.
+  const TrimmedDomain d(
+      kLo, kHi,
+      Loop({Polyline({V(0.05, 0.05), V(0.95, 0.05), V(0.95, 0.95), V(0.05, 0.95), V(0.05, 0.05)})}),
+      {Loop({Circle(V(0.5, 0.5), 0.2, true)})});
+  std::mt19937_64 rng(29);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<V> points;
+  for (int i = 0; i < 1000; ++i) points.emplace_back(unit(rng), unit(rng));
+  points.emplace_back(0.7 + 1e-9, 0.5);  // within the band of the hole
+  double sink = 0.0;
+  const long before = tangent::testing::AllocationCount();
+  for (const V& p : points) sink += d.Contains(p);
+  const long after_contains = tangent::testing::AllocationCount();
+  for (const V& p : points) sink += d.Nearest(p).signed_distance;
+  EXPECT_EQ(after_contains - before, 0) << "Contains";
+  EXPECT_EQ(tangent::testing::AllocationCount() - after_contains, 0) << "Nearest";
+  EXPECT_TRUE(std::isfinite(sink));
 }
 
 }  // namespace
