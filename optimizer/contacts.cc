@@ -29,8 +29,6 @@ void Split(const Matrix14& H, double w, TermHessian* h) {
   h->bb += S.bottomRightCorner<7, 7>();
 }
 
-bool SamePose(const Vector7d& a, const Vector7d& b) { return (a.array() == b.array()).all(); }
-
 }  // namespace
 
 // ---- Surface–surface -----------------------------------------------------------------------

@@ -20,6 +20,12 @@ inline const BodyPose& PoseOf(const std::vector<BodyPose>& poses, int body) {
   return poses[static_cast<size_t>(body)];
 }
 
+/// Whether two poses are the same coordinates, bit for bit (a term's cached evaluation is
+/// reused only then).
+inline bool SamePose(const Vector7d& a, const Vector7d& b) {
+  return (a.array() == b.array()).all();
+}
+
 /// The second derivatives a term adds for its bodies a and b: 7 x 7 blocks (rows a, columns b
 /// for ab) and, for the curvature of rotated body vectors, rotation weights: a term whose value
 /// contains yᵀ R_a v adds y vᵀ to W_a instead of a 4 x 4 block, and the owner folds each body's

@@ -9,8 +9,6 @@ namespace {
 
 using Row14 = Eigen::Matrix<double, 1, 14>;
 
-bool SamePose(const Vector7d& a, const Vector7d& b) { return (a.array() == b.array()).all(); }
-
 // A quarter turn counter-clockwise in the (u, v) plane: the left normal of a direction.
 Eigen::Vector2d Left(const Eigen::Vector2d& x) { return {-x[1], x[0]}; }
 
