@@ -335,12 +335,16 @@ NurbsCurve<Dim> ParseCurve(const std::string& text, const std::string& where) {
   return CurveFromJson<Dim>(ParseText(text, where), where);
 }
 
-NurbsSurface LoadSurface(const std::string& path) {
+nlohmann::json LoadDocument(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw ParseError(path + ": cannot open file");
   std::stringstream ss;
   ss << in.rdbuf();
-  return ParseSurface(ss.str(), path);
+  return ParseText(ss.str(), path);
+}
+
+NurbsSurface LoadSurface(const std::string& path) {
+  return SurfaceFromJson(LoadDocument(path), path);
 }
 
 json ToJson(const NurbsSurface& s) {

@@ -53,6 +53,9 @@ template <int Dim>
 NurbsCurve<Dim> ParseCurve(const std::string& text, const std::string& where = "");
 /// Reads a file. @throws ParseError (including when it cannot be opened).
 NurbsSurface LoadSurface(const std::string& path);
+/// A JSON document from a file (what LoadSurface reads; a scene reads the same document for
+/// its surface and its "trim"). @throws ParseError when it cannot be opened or parsed.
+nlohmann::json LoadDocument(const std::string& path);
 
 /// The JSON form, in metres, weights included only for rational geometry. Round-trips exactly
 /// (doubles are written with 17 significant digits).

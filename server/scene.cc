@@ -45,7 +45,14 @@ Eigen::Isometry3d Placement(const Node& n, double unit) {
   return x;
 }
 
-nurbs::NurbsSurface MakeSurface(const Node& n, double unit, const std::string& base_dir) {
+// A NURBS document's own "trim" (docs/trimming.md), and where it was, for messages.
+struct DocumentTrim {
+  std::optional<nlohmann::json> json;
+  std::string where;
+};
+
+nurbs::NurbsSurface MakeSurface(const Node& n, double unit, const std::string& base_dir,
+                                DocumentTrim* trim) {
   const std::string type = n.At("type").String();
   try {
     if (type == "paperclip") {
@@ -95,7 +102,12 @@ nurbs::NurbsSurface MakeSurface(const Node& n, double unit, const std::string& b
       if (n.Has("file")) {
         std::filesystem::path p = n.At("file").String();
         if (p.is_relative()) p = std::filesystem::path(base_dir) / p;
-        return nurbs::LoadSurface(p.string());
+        const nlohmann::json doc = nurbs::LoadDocument(p.string());  // (read once)
+        if (doc.is_object() && doc.contains("trim")) *trim = {doc["trim"], p.string() + ": /trim"};
+        return nurbs::SurfaceFromJson(doc, p.string());
+      }
+      if (n.At("nurbs").Has("trim")) {
+        *trim = {n.At("nurbs").At("trim").j, n.where + ": " + n.path + ".nurbs.trim"};
       }
       return nurbs::SurfaceFromJson(n.At("nurbs").j, n.where + ": " + n.path + ".nurbs");
     }
@@ -195,7 +207,8 @@ void ParseSurfaces(const Node& root, double unit, const std::string& base_dir, S
     const std::string body = n.At("body").String();
     const int b = s.BodyIndex(body);
     if (b < 0) n.At("body").Fail("no body named \"" + body + "\"");
-    const nurbs::NurbsSurface local = MakeSurface(n, unit, base_dir);
+    DocumentTrim document_trim;
+    const nurbs::NurbsSurface local = MakeSurface(n, unit, base_dir, &document_trim);
     Eigen::Isometry3d X = Placement(n, unit);
     if (n.Has("centre_at")) {
       // Place the surface so its parameter-domain centre lands on this body-frame point.
@@ -207,24 +220,11 @@ void ParseSurfaces(const Node& root, double unit, const std::string& base_dir, S
     }
     s.surfaces.push_back(SceneSurface{name, b, nurbs::Transformed(local, X), {}, false, {}});
     // Trims: in the entry, or in the NURBS document (a file's or the inline one's).
-    std::optional<nlohmann::json> trim;
-    std::string trim_where = n.where + ": " + n.path + ".trim";
+    std::optional<nlohmann::json> trim = document_trim.json;
+    std::string trim_where = document_trim.where;
     if (n.Has("trim")) {
       trim = n.At("trim").j;
-    } else if (n.String("type", "") == "nurbs") {
-      if (n.Has("nurbs") && n.At("nurbs").Has("trim")) {
-        trim = n.At("nurbs").At("trim").j;
-        trim_where = n.where + ": " + n.path + ".nurbs.trim";
-      } else if (n.Has("file")) {
-        std::filesystem::path p = n.At("file").String();
-        if (p.is_relative()) p = std::filesystem::path(base_dir) / p;
-        std::ifstream in(p);
-        const nlohmann::json doc = nlohmann::json::parse(in, nullptr, false);
-        if (doc.is_object() && doc.contains("trim")) {
-          trim = doc["trim"];
-          trim_where = p.string() + ": /trim";
-        }
-      }
+      trim_where = n.where + ": " + n.path + ".trim";
     }
     if (trim) {
       SceneSurface& ss = s.surfaces.back();
