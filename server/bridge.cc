@@ -36,21 +36,6 @@ std::unique_ptr<lcm::LCM> OpenLcm(const std::string& url) {
 
 namespace {
 
-/// Whether a packet starts with the fingerprint of another Tangent message type.
-bool IsOtherTangentType(const void* data) {
-  int64_t hash = 0;
-  const auto* b = static_cast<const uint8_t*>(data);
-  for (int i = 0; i < 8; ++i)
-    hash = static_cast<int64_t>((static_cast<uint64_t>(hash) << 8) | b[i]);
-  const int64_t others[] = {tangent::wrench_t::getHash(), tangent::loop_stats_t::getHash(),
-                            tangent::scene_state_t::getHash(),
-                            tangent::contact_states_t::getHash()};
-  for (int64_t h : others) {
-    if (hash == h) return true;
-  }
-  return false;
-}
-
 DeviceFilterOptions FilterOptions(const DeviceSpec& device, const BridgeOptions& options) {
   DeviceFilterOptions fo;
   fo.device_id = options.device_id;
@@ -200,16 +185,17 @@ class Bridge::Impl {
   /// Every packet on the device channel: decoded here (not by LCM's typed handler, which only
   /// prints a failure) so that undecodable and wrong-type packets are counted.
   void OnDevicePacket(const void* data, uint32_t size) {
-    if (device_msg_.decode(data, 0, static_cast<int>(size)) < 0) {
+    DeviceSample sample;
+    bool wrong_type = false;
+    const PacketFate fate =
+        ReadDevicePacket(data, size, MonotonicNs(), &filter_, &device_msg_, &sample, &wrong_type);
+    if (fate == PacketFate::kUndecodable) {
       ++summary_->undecodable;
-      if (size >= 8 && IsOtherTangentType(data)) ++summary_->wrong_type;
+      if (wrong_type) ++summary_->wrong_type;
       return;
     }
-    const int64_t received = MonotonicNs();
-    const DeviceFilter::Verdict v = filter_.Check(ToReading(device_msg_), received);
-    if (!DeviceFilter::Accepted(v)) return;
-    engine_->Publish(
-        ToSample(device_msg_, filter_.session_index(), filter_.counts().accepted, received));
+    if (fate != PacketFate::kAccepted) return;
+    engine_->Publish(sample);
     awaiting_ = true;
     awaited_seq_ = device_msg_.seq;
   }
@@ -243,10 +229,18 @@ class Bridge::Impl {
     lcm_->publish(ch_.scene, &scene_msg_);
   }
 
-  /// The servo's journal into the log file (contact events, violation excursions).
+  /// The servo's journal into the log file (contact events, violation excursions), and a line
+  /// when the global stage has stalled since the last look.
   void DrainJournal() {
     JournalEntry j;
     char line[200];
+    const int64_t stalls = engine_->global_stalls();
+    if (stalls != stalls_logged_ && log_) {
+      std::fprintf(log_, "%.3f: global stage stalled (%lld so far, longest gap %.1f ms)\n",
+                   1e-9 * static_cast<double>(MonotonicNs() - start_ns_),
+                   static_cast<long long>(stalls), engine_->global_longest_gap_ms());
+    }
+    stalls_logged_ = stalls;
     while (engine_->journal().Pop(&j)) {
       if (!log_) continue;
       FormatJournalEntry(j, start_ns_, line, sizeof(line));
@@ -297,6 +291,7 @@ class Bridge::Impl {
   Engine* engine_;
   Channels ch_;
   std::FILE* log_;
+  int64_t stalls_logged_ = 0;
   bool status_;
   std::unique_ptr<lcm::LCM> lcm_;
   std::unique_ptr<LcmSubscriptions> subs_;
@@ -364,6 +359,8 @@ std::string Bridge::Impl::Report() const {
     << "\nfaults=" << c.faults << "\nwrenches_sent=" << b.wrenches_sent
     << "\ntimeout_wrenches=" << c.timeout_wrenches << "\nwrenches_dropped=" << c.wrenches_dropped
     << "\nglobal_passes=" << engine_->global_passes()
+    << "\nglobal_stalls=" << engine_->global_stalls()
+    << "\nglobal_longest_gap_ms=" << engine_->global_longest_gap_ms()
     << "\nglobal_pass_p50_us=" << DurationHistogram::Quantile(g.data(), 0.5)
     << "\nglobal_pass_max_us=" << engine_->global_histogram().max()
     << "\ncontact_events=" << c.events_applied << "\nevents_dropped=" << c.events_dropped

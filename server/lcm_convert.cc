@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include <tangent/loop_stats_t.hpp>
+
 namespace tangent::server {
 
 DeviceReading ToReading(const tangent::device_state_t& m) {
@@ -14,6 +16,41 @@ DeviceReading ToReading(const tangent::device_state_t& m) {
   std::memcpy(r.orientation, m.orientation, sizeof(r.orientation));
   std::memcpy(r.velocity, m.velocity, sizeof(r.velocity));
   return r;
+}
+
+namespace {
+
+/// Whether a packet starts with the fingerprint of another Tangent message type.
+bool IsOtherTangentType(const void* data, uint32_t size) {
+  if (size < 8) return false;
+  int64_t hash = 0;
+  const auto* b = static_cast<const uint8_t*>(data);
+  for (int i = 0; i < 8; ++i)
+    hash = static_cast<int64_t>((static_cast<uint64_t>(hash) << 8) | b[i]);
+  const int64_t others[] = {tangent::wrench_t::getHash(), tangent::loop_stats_t::getHash(),
+                            tangent::scene_state_t::getHash(),
+                            tangent::contact_states_t::getHash()};
+  for (int64_t h : others) {
+    if (hash == h) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+PacketFate ReadDevicePacket(const void* data, uint32_t size, int64_t received_ns,
+                            DeviceFilter* filter, tangent::device_state_t* scratch,
+                            DeviceSample* sample, bool* wrong_type) {
+  *wrong_type = false;
+  if (size > static_cast<uint32_t>(INT32_MAX) ||
+      scratch->decode(data, 0, static_cast<int>(size)) < 0) {
+    *wrong_type = IsOtherTangentType(data, size);
+    return PacketFate::kUndecodable;
+  }
+  const DeviceFilter::Verdict v = filter->Check(ToReading(*scratch), received_ns);
+  if (!DeviceFilter::Accepted(v)) return PacketFate::kRejected;
+  *sample = ToSample(*scratch, filter->session_index(), filter->counts().accepted, received_ns);
+  return PacketFate::kAccepted;
 }
 
 DeviceSample ToSample(const tangent::device_state_t& m, int64_t session_index, int64_t accepted,

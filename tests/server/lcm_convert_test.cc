@@ -54,6 +54,49 @@ TEST(LcmConvertTest, DeviceStateBecomesReadingAndSample) {
   }
 }
 
+TEST(LcmConvertTest, EveryDevicePacketHasOneFateAndOnlyAcceptedOnesReachTheServo) {
+  DeviceFilter filter;
+  tangent::device_state_t scratch;
+  DeviceSample sample;
+  bool wrong_type = true;
+  tangent::device_state_t m{};
+  m.device_id = 1;
+  m.session = 9;
+  m.seq = 1;
+  m.orientation[0] = 1.0;
+  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  const auto size = static_cast<uint32_t>(buf.size());
+
+  EXPECT_EQ(ReadDevicePacket(buf.data(), size, 1000, &filter, &scratch, &sample, &wrong_type),
+            PacketFate::kAccepted);
+  EXPECT_FALSE(wrong_type);
+  EXPECT_EQ(sample.seq, 1);
+  EXPECT_EQ(sample.received_ns, 1000);
+  EXPECT_EQ(sample.session_index, 1);
+  EXPECT_EQ(sample.accepted, 1);
+  // The same state again: decoded, refused by the filter (sequence), sample untouched.
+  sample.seq = -1;
+  EXPECT_EQ(ReadDevicePacket(buf.data(), size, 2000, &filter, &scratch, &sample, &wrong_type),
+            PacketFate::kRejected);
+  EXPECT_EQ(sample.seq, -1);
+  EXPECT_EQ(filter.counts().sequence, 1);
+  // Cut short, empty, and another Tangent type's fingerprint: undecodable, the last one named.
+  EXPECT_EQ(ReadDevicePacket(buf.data(), size - 1, 3000, &filter, &scratch, &sample, &wrong_type),
+            PacketFate::kUndecodable);
+  EXPECT_FALSE(wrong_type);
+  EXPECT_EQ(ReadDevicePacket(buf.data(), 0, 3000, &filter, &scratch, &sample, &wrong_type),
+            PacketFate::kUndecodable);
+  tangent::wrench_t w{};
+  std::vector<uint8_t> wbuf(static_cast<size_t>(w.getEncodedSize()));
+  w.encode(wbuf.data(), 0, static_cast<int>(wbuf.size()));
+  EXPECT_EQ(ReadDevicePacket(wbuf.data(), static_cast<uint32_t>(wbuf.size()), 4000, &filter,
+                             &scratch, &sample, &wrong_type),
+            PacketFate::kUndecodable);
+  EXPECT_TRUE(wrong_type);
+  EXPECT_EQ(filter.counts().accepted, 1);
+}
+
 TEST(LcmConvertTest, WrenchContactsAndSceneComeOutFieldForField) {
   WrenchSample ws;
   ws.utime = 11;
