@@ -32,7 +32,20 @@ struct NewtonSystem {
   /// The pair interpenetrates here (its extremum of interest is then a saddle of ½|d|², which
   /// the bound-constrained minimization must not replace with the crossing's zero distance).
   bool penetrating = false;
+  /// The pair touches here: the two points coincide to rounding (|d| ≤ kTouchingDistance of the
+  /// problem's size) and the normals are parallel (tangent surfaces, not a crossing). At β = 0
+  /// the Newton matrix loses rank (the four tangents lie in one plane, and d's curvature terms
+  /// vanish), so Newton and the minimization only creep toward such a point; it is as exact as
+  /// the evaluation, and both solvers stop on it as converged.
+  bool touching = false;
 };
+
+/// |d| below this fraction of the problem's size (coordinates and first-form lengths): the
+/// points coincide to the evaluation's rounding (parts of 30 mm: 1e-16 m). So tight because
+/// along the tangent plane the pair is fixed only to sqrt(2 R |d|): 1e-15 keeps it below 1 nm.
+inline constexpr double kTouchingDistance = 1e-15;
+/// |n_f × n_g| below this (unit normals): tangent, not crossing.
+inline constexpr double kTouchingSine = 1e-5;
 
 /// Reciprocal condition below which a Newton or Jacobian matrix counts as singular: u_q solved
 /// from it would carry a relative error of ~eps/rcond ≈ 1e-6, the accuracy the optimizer's
@@ -179,6 +192,11 @@ BoxNewtonResult<N> BoxNewton(Eval&& eval, const Eigen::Matrix<double, N, 1>& x0,
   eval(res.x, &sys);
   int releases = 0;
   for (res.iterations = 0; res.iterations < opt.max_iterations; ++res.iterations) {
+    if (sys.touching) {  // (the last evaluation is at res.x)
+      res.converged = true;
+      res.singular = false;
+      break;
+    }
     const bool any = std::any_of(res.active.begin(), res.active.end(), [](bool b) { return b; });
     Vec r;
     Mat a;
@@ -292,6 +310,10 @@ BoxNewtonResult<N> BoxMinimize(Eval&& eval, const Eigen::Matrix<double, N, 1>& x
   };
   const int budget = 4 * opt.max_iterations;
   for (res.iterations = 0; res.iterations < budget; ++res.iterations) {
+    if (sys.touching) {  // (the last evaluation is at res.x)
+      res.converged = true;
+      break;
+    }
     const Vec& g = sys.grad;
     // Diagonal scaling for the held parameters' gradient steps.
     const double floor = std::max(1e-12 * sys.hess.diagonal().cwiseAbs().maxCoeff(), 1e-300);

@@ -130,6 +130,14 @@ void FillGradientForm(SurfacePairEval* out) {
 
 namespace {
 
+// NewtonSystem::touching for a surface pair (limit normals at poles: a dome touched at its pole
+// is the common case).
+bool Touching(const SurfacePairEval& e, double first_form_scale) {
+  const double size = std::sqrt(first_form_scale) + e.f.world.S.norm() + e.g.world.S.norm();
+  if (!(e.d.norm() <= internal::kTouchingDistance * size)) return false;
+  return e.f.unit_normal().cross(e.g.unit_normal()).norm() <= internal::kTouchingSine;
+}
+
 template <int N>
 ExtremalStatus StatusOf(const internal::BoxNewtonResult<N>& r) {
   // A singular matrix at the end explains a budget run out (Newton is only linear there), so it
@@ -318,14 +326,6 @@ internal::BoxNewtonResult<N> SolveOnBox(Eval&& eval, Pole&& pole,
     if (seed_value < 0.0) seed_value = s->value;
   };
   internal::BoxNewtonResult<N> first = internal::BoxNewton<N>(recorded, seed, lo, hi, opt);
-  // A minimum farther apart than the seed's own pair lies in another basin: Newton on F is not
-  // a descent method and can cross to it. (A penetration extremum may be deeper than the seed.)
-  const bool uphill = last.value > seed_value * (1.0 + 1e-12) + 1e-300;
-  if (seek == Seek::kNearest || (IsBoxMinimum<N>(first, last, lo, hi) && !uphill) ||
-      IsPenetration<N>(first, last)) {
-    *at_x = last;
-    return first;
-  }
   int iterations = first.iterations;
   // The pole pair as the answer: converged, nothing held (a pole is not an edge).
   auto at_pole = [&](const Vec& y) {
@@ -337,9 +337,26 @@ internal::BoxNewtonResult<N> SolveOnBox(Eval&& eval, Pole&& pole,
     eval(y, at_x);
     return r;
   };
+  Vec y;
+  // A touching pair (NewtonSystem::touching) is the minimum; on a pole row, the pole pair.
+  auto touching = [&](internal::BoxNewtonResult<N> r) {
+    if (pole(r.x, &y) == PoleAction::kExtremum) return at_pole(y);
+    r.iterations = iterations;
+    *at_x = last;
+    return r;
+  };
+  // A minimum farther apart than the seed's own pair lies in another basin: Newton on F is not
+  // a descent method and can cross to it. (A penetration extremum may be deeper than the seed.)
+  const bool uphill = last.value > seed_value * (1.0 + 1e-12) + 1e-300;
+  if (first.converged && last.touching) return touching(first);
+  if (seek == Seek::kNearest || (IsBoxMinimum<N>(first, last, lo, hi) && !uphill) ||
+      IsPenetration<N>(first, last)) {
+    *at_x = last;
+    return first;
+  }
   internal::BoxNewtonResult<N> m = internal::BoxMinimize<N>(recorded, seed, lo, hi, opt);
   iterations += m.iterations;
-  Vec y;
+  if (m.converged && last.touching) return touching(m);
   for (int escapes = 0; escapes < 3; ++escapes) {
     const PoleAction action = pole(m.x, &y);
     if (action == PoleAction::kExtremum) return at_pole(y);
@@ -458,6 +475,7 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
     s->classify_scale = std::max(FirstFormScale(e.f.world), FirstFormScale(e.g.world));
     // Each inside the other (facing normals): not a spurious saddle of a separated pair.
     s->penetrating = e.d.dot(e.g.N_W) < 0.0 && e.d.dot(e.f.N_W) > 0.0;
+    s->touching = Touching(e, s->classify_scale);
   };
   Eigen::Vector4d lo, hi;
   lo << Lo(f), Lo(g);
@@ -484,7 +502,10 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
       y->segment<2>(2 * side) = at;
       y->segment<2>(2 * (1 - side)) = q.u;
       double angle = 0.0;
-      if (BestDeparture(s, ps, row, d, side == 0 ? 1.0 : -1.0, &angle) < -1e-9 * d.norm()) {
+      // Touching at the pole (d at rounding level, its direction noise): no departure to take.
+      const bool touching = d.norm() <= internal::kTouchingDistance * (P.norm() + q.p_f.norm());
+      if (!touching &&
+          BestDeparture(s, ps, row, d, side == 0 ? 1.0 : -1.0, &angle) < -1e-9 * d.norm()) {
         const int i = 2 * side + row.across;
         (*y)[2 * side + 1 - row.across] = angle;
         (*y)[i] = row.bound + row.inward * 1e-3 * (hi[i] - lo[i]);
@@ -508,7 +529,8 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
     out.beta = side * dist;
   }
   out.status = StatusOf(r);
-  out.kind = KindAt<4>(r, sys, lo, hi);
+  // Touching: the minimum of the distance (zero), though the Hessian of ½|d|² is singular there.
+  out.kind = sys.touching && r.converged ? ExtremumKind::kMinimum : KindAt<4>(r, sys, lo, hi);
   out.iterations = r.iterations;
   out.rcond = r.rcond;
   if (at_solution) *at_solution = e;

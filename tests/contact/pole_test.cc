@@ -123,3 +123,43 @@ TEST(PoleTest, PointSolvesReachThePole) {
 
 }  // namespace
 }  // namespace tangent::contact
+
+namespace tangent::contact {
+namespace {
+
+// A plate exactly touching a dome at its pole (β = 0): Newton's matrix loses rank there (the
+// four tangents lie in one plane), and before NewtonSystem::touching the solves crept toward it
+// for hundreds of iterations (650, up to 6 ms each: a 400 ms global pass when eight domes were
+// touched at once, scripts/faults.sh contact_burst) and half ended "at the boundary" on the
+// pole row. Now every seed stops on the touching pair as converged, at the pole.
+TEST(PoleTest, APairTouchingAtAPoleConvergesQuicklyToThePole) {
+  const nurbs::NurbsSurface dome = nurbs::MakeSphere({-6e-3, -18e-3, 0}, 3e-3);
+  const nurbs::NurbsSurface plate =
+      nurbs::MakePlanePatch({-15e-3, -25e-3, 0}, {0, 50e-3, 0}, {30e-3, 0, 0});
+  const BodyPose at_rest = BodyPose::FromCoordinates(Coordinates({0, 0, 0}, {1, 0, 0, 0}));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (double z : {3e-3, 3e-3 + 1e-9, 3e-3 - 1e-9}) {
+    const BodyPose lifted = BodyPose::FromCoordinates(Coordinates({0, 0, z}, {1, 0, 0, 0}));
+    int worst_iterations = 0;
+    for (int k = 0; k < 100; ++k) {
+      // Plate parameters within 2 mm of the spot above the pole; dome seeds on its upper half.
+      const double y = -18e-3 + (unit(rng) - 0.5) * 4e-3, x = -6e-3 + (unit(rng) - 0.5) * 4e-3;
+      const Eigen::Vector4d seed((y + 25e-3) / 50e-3, (x + 15e-3) / 30e-3, unit(rng),
+                                 0.75 + 0.25 * unit(rng));
+      const SurfaceSurfaceExtremum e = SolveSurfaceSurface(plate, lifted, dome, at_rest, seed);
+      ASSERT_EQ(e.status, ExtremalStatus::kConverged) << "z " << z << " seed " << seed.transpose();
+      EXPECT_EQ(e.kind, ExtremumKind::kMinimum);
+      EXPECT_NEAR(e.beta, z - 3e-3, 1e-15) << "seed " << seed.transpose();
+      EXPECT_LT((e.p_g - Eigen::Vector3d(-6e-3, -18e-3, 3e-3)).norm(), 1e-9);
+      EXPECT_LT(e.alignment, 0.0);
+      worst_iterations = std::max(worst_iterations, e.iterations);
+    }
+    EXPECT_LE(worst_iterations, 200) << "z " << z;
+    std::printf("plate touching a dome's pole, z − r = %+.0e m: worst %d iterations\n", z - 3e-3,
+                worst_iterations);
+  }
+}
+
+}  // namespace
+}  // namespace tangent::contact
