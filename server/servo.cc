@@ -332,10 +332,24 @@ void ServoLoop::StartSession(int64_t session_index) {
   last_seq_ = -1;
   last_answer_ns_ = 0;
   last_timeout_ns_ = 0;
+  sent_f_D_.setZero();  // a new session's wrenches start from zero (its driver restarted)
+  sent_ns_ = 0;
 }
 
-void ServoLoop::FillWrench(const DeviceSample& d, int64_t now_ns, int8_t state,
-                           WrenchSample* w) const {
+void ServoLoop::LimitAgainstSent(int64_t now_ns) {
+  const DeviceSpec& dv = scene_->device;
+  const double dt =
+      sent_ns_ > 0 ? std::min(1e-9 * static_cast<double>(now_ns - sent_ns_), 2.0 / dv.device_rate)
+                   : 0.0;
+  const double max_step = dv.max_force_rate * std::max(dt, 0.0);
+  const Eigen::Vector3d step = f_D_ - sent_f_D_;
+  const double s = step.norm();
+  if (s > max_step) f_D_ = sent_f_D_ + step * (max_step / s);
+}
+
+void ServoLoop::FillWrench(const DeviceSample& d, int64_t now_ns, int8_t state, WrenchSample* w) {
+  sent_f_D_ = f_D_;
+  sent_ns_ = now_ns;
   w->utime = d.utime;
   w->seq = d.seq;
   w->device_id = d.device_id;
@@ -399,7 +413,7 @@ void ServoLoop::Tick(const DeviceSample* device, int64_t now_ns, TickResult* out
     fault = true;
     ramp_ = 0.0;
   }
-  if (!RenderLimited(f_D, tau_D, dt_answer)) fault = true;
+  if (!RenderLimited(f_D, tau_D, now_ns)) fault = true;
   out->fault = fault;
   last_seq_ = device->seq;
   last_answer_ns_ = now_ns;
@@ -463,6 +477,7 @@ void ServoLoop::RampDownSilent(const DeviceSample* device, int64_t now_ns, doubl
   have_p_TG_D_ = false;
   const bool due = 1e-9 * static_cast<double>(now_ns - last_timeout_ns_) >= 1.0 / dv.device_rate;
   if (device && last_seq_ >= 0 && due && !timeout_final_sent_) {
+    LimitAgainstSent(now_ns);  // a late tick's ramp step is held to two periods' worth
     FillWrench(last_answered_, now_ns, fault ? kFault : kTimeout, &out->wrench);
     out->answered = true;
     last_timeout_ns_ = now_ns;
@@ -508,19 +523,17 @@ bool ServoLoop::Couple(const DeviceSample& device, double dt_answer, const Injec
   return true;
 }
 
-bool ServoLoop::RenderLimited(Eigen::Vector3d f_D, Eigen::Vector3d tau_D, double dt_answer) {
+bool ServoLoop::RenderLimited(Eigen::Vector3d f_D, Eigen::Vector3d tau_D, int64_t now_ns) {
   const DeviceSpec& dv = scene_->device;
   const double f = f_D.norm();
   if (f > dv.max_force) f_D *= dv.max_force / f;
   f_D *= ramp_;
   tau_D *= ramp_;
-  // Force-rate limit between answers, on the server's clock, and at most two device periods'
-  // worth per answer (a device holds its last force between answers: a late answer must not
-  // step further than a punctual one could).
-  const double max_step = dv.max_force_rate * std::min(dt_answer, 2.0 / dv.device_rate);
-  const Eigen::Vector3d step = f_D - f_D_;
-  const double s = step.norm();
-  f_D_ += s > max_step ? Eigen::Vector3d(step * (max_step / s)) : step;
+  // Force-rate limit against the last wrench sent (an answer or a timeout wrench), on the
+  // server's clock, and at most two device periods' worth per wrench (a device holds its last
+  // force between wrenches: a late answer must not step further than a punctual one could).
+  f_D_ = f_D;
+  LimitAgainstSent(now_ns);
   if (f_D_.norm() > dv.max_force) f_D_ *= dv.max_force / f_D_.norm();
   tau_D_ = tau_D;
   if (!f_D_.allFinite() || !tau_D_.allFinite()) {  // unreachable: the last line of defence

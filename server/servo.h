@@ -143,9 +143,15 @@ class ServoLoop {
               Eigen::Vector3d* f_D, Eigen::Vector3d* tau_D);
   /// Saturates, ramps and rate-limits the wrench into f_D_, tau_D_; false if they were not
   /// finite (zeroed).
-  bool RenderLimited(Eigen::Vector3d f_D, Eigen::Vector3d tau_D, double dt_answer);
-  /// Fills the wrench answering `d` (or the timeout wrench) from f_D_ and tau_D_.
-  void FillWrench(const DeviceSample& d, int64_t now_ns, int8_t state, WrenchSample* w) const;
+  bool RenderLimited(Eigen::Vector3d f_D, Eigen::Vector3d tau_D, int64_t now_ns);
+  /// The force-rate limit (docs/server.md): f_D_ moved to within max_force_rate × (server time
+  /// since the last wrench sent, capped at two device periods) of that wrench's force. Every
+  /// wrench sent passes it (answers and timeout wrenches alike): the device holds the last
+  /// force it got, so the step it renders is the step between consecutive wrenches.
+  void LimitAgainstSent(int64_t now_ns);
+  /// Fills the wrench answering `d` (or the timeout wrench) from f_D_ and tau_D_, and records it
+  /// as the last sent.
+  void FillWrench(const DeviceSample& d, int64_t now_ns, int8_t state, WrenchSample* w);
 
   const Scene* scene_;
   Eigen::Vector3d device_origin_;  ///< world, m: the scene's, or the grasp point at rest
@@ -182,6 +188,9 @@ class ServoLoop {
   // last p_TG_D, and the wrench on the hand after the rate limit, f_D_ (N) and tau_D_ (N·m).
   Eigen::Vector3d p_TG_D_prev_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d f_D_ = Eigen::Vector3d::Zero(), tau_D_ = Eigen::Vector3d::Zero();
+  /// The force of the last wrench sent in this session and its server time (0: none yet).
+  Eigen::Vector3d sent_f_D_ = Eigen::Vector3d::Zero();
+  int64_t sent_ns_ = 0;
   double ramp_ = 0.0;  ///< 0..1
   int64_t last_tick_ns_ = 0;
   int64_t ticks_ = 0;
