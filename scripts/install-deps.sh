@@ -26,6 +26,8 @@ packages=(
   coinor-libipopt-dev libnlopt-cxx-dev
   # Offline design runs across processes and machines (tangent-opt under mpirun), and their plots.
   libopenmpi-dev openmpi-bin python3-matplotlib
+  # Fuzzing (scripts/fuzz.sh): clang with its libFuzzer and sanitizer runtimes.
+  clang libclang-rt-14-dev
 )
 
 missing=()

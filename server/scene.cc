@@ -245,7 +245,7 @@ void ParseSurfaces(const Node& root, double unit, const std::string& base_dir, S
 // Bodies made of a CAD part (docs/cad.md): every face of the file a trimmed surface on the body,
 // its coordinates taken in the body's frame (metres, whatever the file's unit).
 void ParseCadBodies(const Node& root, const std::string& base_dir, Scene* out) {
-  Scene& s = *out;
+  [[maybe_unused]] Scene& s = *out;  // (unused without CAD import)
   const Node bodies = root.At("bodies");
   for (size_t i = 0; i < bodies.Size(); ++i) {
     const Node b = bodies.At(i);
@@ -491,7 +491,7 @@ void BuildOffsetMeshes(Scene* out) {
 }  // namespace
 
 std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& where,
-                                  const std::string& base_dir) {
+                                  const std::string& base_dir, const SceneLoadOptions& options) {
   json j;
   try {
     j = json::parse(text);
@@ -524,7 +524,7 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
   ParseGrasp(root, unit, &s);
   ParseObjectives(root, unit, &s);
   ParseDevice(root, unit, &s);
-  BuildOffsetMeshes(&s);
+  if (options.offset_meshes) BuildOffsetMeshes(&s);
   return scene;
 }
 

@@ -127,9 +127,17 @@ struct Scene {
   int JointIndex(const std::string& name) const;
 };
 
+struct SceneLoadOptions {
+  /// Build and certify the offset meshes of watched surfaces (the global stage needs them).
+  /// Off only where a scene is read for its description alone: the scene fuzzer, which would
+  /// otherwise spend its time certifying the example scenes' meshes (tested on their own).
+  bool offset_meshes = true;
+};
+
 /// Parses a scene. `where` names the source in error messages. @throws SceneError.
 std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& where,
-                                  const std::string& base_dir = ".");
+                                  const std::string& base_dir = ".",
+                                  const SceneLoadOptions& options = {});
 /// Loads a scene file (NURBS files it names are resolved relative to it). @throws SceneError.
 std::unique_ptr<Scene> LoadScene(const std::string& path);
 
