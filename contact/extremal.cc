@@ -130,14 +130,6 @@ void FillGradientForm(SurfacePairEval* out) {
 
 namespace {
 
-// NewtonSystem::touching for a surface pair (limit normals at poles: a dome touched at its pole
-// is the common case).
-bool Touching(const SurfacePairEval& e, double first_form_scale) {
-  const double size = std::sqrt(first_form_scale) + e.f.world.S.norm() + e.g.world.S.norm();
-  if (!(e.d.norm() <= internal::kTouchingDistance * size)) return false;
-  return e.f.unit_normal().cross(e.g.unit_normal()).norm() <= internal::kTouchingSine;
-}
-
 template <int N>
 ExtremalStatus StatusOf(const internal::BoxNewtonResult<N>& r) {
   // A singular matrix at the end explains a budget run out (Newton is only linear there), so it
@@ -255,6 +247,25 @@ PoleRow FindPoleRow(const nurbs::NurbsSurface& s, const Eigen::Vector2d& uv) {
     if (off.norm() > 0.0 && along.norm() <= nurbs::kDegenerateRatio * off.norm()) return row;
   }
   return {};
+}
+
+// NewtonSystem::touching for a surface pair at parameters x (limit normals at poles: a dome
+// touched at its pole is the common case). Off a pole the points must coincide to rounding
+// (kTouchingDistance): along the tangent plane a touching pair is fixed only to sqrt(2 R |d|).
+// On a pole row the pair is re-made exactly by the pole's own answer (SolveOnBox: the pole
+// point and its foot), so there a gap within the servo's hold of an active contact counts: such
+// a pair, nearly singular twice over (β ≈ 0 and the pole), otherwise took 500 iterations.
+constexpr double kTouchingAtPole = 1e-9;
+bool Touching(const SurfacePairEval& e, double first_form_scale, const nurbs::NurbsSurface& f,
+              const nurbs::NurbsSurface& g, const Eigen::Vector4d& x) {
+  const double size = std::sqrt(first_form_scale) + e.f.world.S.norm() + e.g.world.S.norm();
+  const double dist = e.d.norm();
+  if (!(dist <= kTouchingAtPole * size)) return false;
+  if (!(e.f.unit_normal().cross(e.g.unit_normal()).norm() <= internal::kTouchingSine)) {
+    return false;
+  }
+  if (dist <= internal::kTouchingDistance * size) return true;
+  return FindPoleRow(f, x.head<2>()).found || FindPoleRow(g, x.tail<2>()).found;
 }
 
 // Number of departure angles sampled around a pole (the best is then refined by the solve).
@@ -475,7 +486,7 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
     s->classify_scale = std::max(FirstFormScale(e.f.world), FirstFormScale(e.g.world));
     // Each inside the other (facing normals): not a spurious saddle of a separated pair.
     s->penetrating = e.d.dot(e.g.N_W) < 0.0 && e.d.dot(e.f.N_W) > 0.0;
-    s->touching = Touching(e, s->classify_scale);
+    s->touching = Touching(e, s->classify_scale, f, g, x);
   };
   Eigen::Vector4d lo, hi;
   lo << Lo(f), Lo(g);

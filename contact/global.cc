@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -62,23 +63,47 @@ struct Watched {
   double w_u = 1.0, w_v = 1.0;  // domain widths
   bool periodic_u = false, periodic_v = false;
 
+  // Pole rows (a domain edge collapsed to one point: a sphere's or a revolved part's apex):
+  // [0] u = u_lo, [1] u = u_hi (S_v vanishes along them), [2] v = v_lo, [3] v = v_hi (S_u).
+  std::array<bool, 4> pole{};
+  double u_lo = 0.0, v_lo = 0.0;
+
   // Arc-length distance from a parameter point to the farthest corner of a chunk's box, i.e. an
-  // upper bound of Along(x, y) over the chunk's points y.
+  // upper bound of Along(x, y) over the chunk's points y (each path's own maximum over the
+  // corners: min(f, g) ≤ min(max f, max g)).
   double FarthestAlong(const Eigen::Vector2d& x, const Chunk& c) const {
-    double worst = 0.0;
+    double direct = 0.0;
+    std::array<double, 4> via{};
     for (double u : {c.uv_lo[0], c.uv_hi[0]}) {
       for (double v : {c.uv_lo[1], c.uv_hi[1]}) {
-        worst = std::max(worst, Along(x, Eigen::Vector2d(u, v)));
+        const Eigen::Vector2d y(u, v);
+        direct = std::max(direct, Direct(x, y));
+        for (int k = 0; k < 4; ++k) via[k] = std::max(via[k], ViaPole(k, x, y));
       }
     }
-    return worst;
+    return std::min(direct, *std::min_element(via.begin(), via.end()));
   }
-  // Arc-length distance between two parameter points (periodic directions wrap).
+  // Arc-length distance between two parameter points (periodic directions wrap): along the
+  // parameter lines, or through a pole (moving along a pole row costs nothing, so two points
+  // near an apex are near each other whatever their angles).
   double Along(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+    double best = Direct(a, b);
+    for (int k = 0; k < 4; ++k) best = std::min(best, ViaPole(k, a, b));
+    return best;
+  }
+  double Direct(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
     double du = std::abs(a[0] - b[0]), dv = std::abs(a[1] - b[1]);
     if (periodic_u) du = std::min(du, w_u - du);
     if (periodic_v) dv = std::min(dv, w_v - dv);
     return du * L_u + dv * L_v;
+  }
+  // To pole row k and along it to b (+inf without that pole).
+  double ViaPole(int k, const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+    if (!pole[static_cast<size_t>(k)]) return std::numeric_limits<double>::infinity();
+    const int across = k < 2 ? 0 : 1;
+    const double bound = across == 0 ? (k == 0 ? u_lo : u_lo + w_u) : (k == 2 ? v_lo : v_lo + w_v);
+    const double L = across == 0 ? L_u : L_v;
+    return (std::abs(a[across] - bound) + std::abs(b[across] - bound)) * L;
   }
 };
 
@@ -289,6 +314,24 @@ Watched WatchSurface(int index, const GlobalSurface& s, const GlobalOptions& opt
   w.w_v = s.surface->knots_v().domain_end() - s.surface->knots_v().domain_begin();
   w.periodic_u = s.surface->periodic_u();
   w.periodic_v = s.surface->periodic_v();
+  w.u_lo = s.surface->knots_u().domain_begin();
+  w.v_lo = s.surface->knots_v().domain_begin();
+  // Pole rows: the partial along the edge vanishes at every sample of it.
+  for (int k = 0; k < 4; ++k) {
+    const int across = k < 2 ? 0 : 1;
+    const double bound =
+        across == 0 ? (k == 0 ? w.u_lo : w.u_lo + w.w_u) : (k == 2 ? w.v_lo : w.v_lo + w.w_v);
+    bool collapsed = true;
+    for (int i = 0; i <= 8 && collapsed; ++i) {
+      const double t = (across == 0 ? w.v_lo + w.w_v * i / 8.0 : w.u_lo + w.w_u * i / 8.0);
+      const nurbs::SurfacePoint p =
+          across == 0 ? s.surface->Evaluate(bound, t, 1) : s.surface->Evaluate(t, bound, 1);
+      const Eigen::Vector3d& along = across == 0 ? p.S_v : p.S_u;
+      const Eigen::Vector3d& off = across == 0 ? p.S_u : p.S_v;
+      collapsed = off.norm() > 0.0 && along.norm() <= nurbs::kDegenerateRatio * off.norm();
+    }
+    w.pole[static_cast<size_t>(k)] = collapsed;
+  }
   return w;
 }
 
@@ -584,9 +627,14 @@ void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
     // A removal names the contact by the parameters it is tracked at (what the owner of the
     // contact matches it by), with the distance and points re-solved now.
     GlobalContact now{c.a, c.b, c.u, e.beta, e.p_f, e.p_g};
+    // kSingular is not a loss: a pair held at β ≈ 0 (every active contact, within the servo's
+    // 1e-10 m) makes the Newton matrix nearly rank deficient, the more so at a pole, and the
+    // re-solve ends converged-but-singular on the same pair. Removing it there made contacts
+    // at domes' poles chatter (removed and found again every pass: scripts/faults.sh
+    // contact_burst); the servo's tracker holds them exactly, and separation still removes them.
     if (e.status == ExtremalStatus::kAtBoundary) {
       events->push_back({ContactEvent::Kind::kRemoved, ContactEvent::Reason::kLeftDomain, now});
-    } else if (e.status != ExtremalStatus::kConverged) {
+    } else if (e.status != ExtremalStatus::kConverged && e.status != ExtremalStatus::kSingular) {
       events->push_back({ContactEvent::Kind::kRemoved, ContactEvent::Reason::kLost, now});
     } else if (e.beta > options_.release) {
       events->push_back({ContactEvent::Kind::kRemoved, ContactEvent::Reason::kSeparated, now});
