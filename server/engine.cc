@@ -5,6 +5,7 @@
 #include <sched.h>
 #include <sys/eventfd.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 
@@ -67,7 +68,7 @@ inline void CpuRelax() {
 
 void FormatJournalEntry(const JournalEntry& j, int64_t start_ns, char* out, size_t size) {
   const double t = 1e-9 * static_cast<double>(j.time_ns - start_ns);
-  if (j.kind == JournalEntry::kFault) {
+  if (j.kind == JournalEntry::kFaultTick) {
     std::snprintf(out, size,
                   "t=%.4fs tick %lld: fault (non-finite or absurd intermediate): scene restored, "
                   "force to zero",
@@ -276,7 +277,7 @@ void Engine::CountTick(ServoState* s, int64_t start) {
     JournalEntry j;
     j.tick = c.ticks;
     j.time_ns = start;
-    j.kind = JournalEntry::kFault;
+    j.kind = JournalEntry::kFaultTick;
     journal_.Push(j);
   }
   c.unanswered += r.unanswered;
@@ -345,13 +346,30 @@ void Engine::Pace(ServoState* s, int64_t start, bool early) {
 void Engine::GlobalThread() {
   prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
   PinToCore(options_.global_cpu);
+  // The global stage shares its core with the LCM bridge, and a pass can take tens of
+  // milliseconds (eight contacts appearing at once: 23 ms). At nice 10 the scheduler wakes the
+  // bridge at once when a device state arrives instead of letting the pass finish its slice
+  // (scripts/faults.sh contact_burst).
+  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), options_.global_nice);
   GlobalLink link(*servo_);
   Snapshot snap;
   const int64_t period = static_cast<int64_t>(1e9 / options_.global_rate_hz);
   int64_t next = MonotonicNs();
+  int64_t last_wake = next;
+  const auto stall_ns = static_cast<int64_t>(options_.global_stall_ms * 1e6);
   unsigned last_version = 0;
   while (running_.load(std::memory_order_relaxed)) {
     next += period;
+    if (inject_global_stall_.exchange(false, std::memory_order_relaxed)) {
+      SleepUntil(MonotonicNs() + static_cast<int64_t>(options_.injected_global_stall_ms * 1e6));
+    }
+    const int64_t woke = MonotonicNs();
+    const int64_t gap = woke - last_wake;
+    last_wake = woke;
+    if (gap > stall_ns) global_stalls_.fetch_add(1, std::memory_order_relaxed);
+    if (gap > global_longest_gap_ns_.load(std::memory_order_relaxed)) {
+      global_longest_gap_ns_.store(gap, std::memory_order_relaxed);
+    }
     const unsigned v = snapshot_.Read(&snap);
     // Wait until the servo has applied every event pushed (else a contact just added would be
     // found again, untracked).

@@ -29,7 +29,15 @@ struct EngineOptions {
   int servo_cpu = 0;   ///< core for the servo loop (−1: not pinned)
   int global_cpu = 1;  ///< core for the global contact stage (−1: not pinned)
   double global_rate_hz = 1000.0;
+  /// Nice value of the global-stage thread: below the bridge that shares its core (engine.cc).
+  int global_nice = 10;
   double journal_violation = 1e-6;  ///< a tick's violation above this is journalled
+  /// A gap between two global passes longer than this is a stall: counted (global_stalls) and
+  /// logged by the bridge. The servo keeps tracking its contacts meanwhile; only new contacts
+  /// wait for the next pass.
+  double global_stall_ms = 50.0;
+  /// Fault injection (tangentd --fault-injection, SIGUSR1): the global stage sleeps this long.
+  double injected_global_stall_ms = 100.0;
   ServoOptions servo;
 };
 
@@ -99,7 +107,7 @@ struct WindowMax {
 /// the rate benchmark): contact events as applied, and ticks whose solve left a violation above
 /// EngineOptions::journal_violation.
 struct JournalEntry {
-  enum Kind : int32_t { kEventApplied = 0, kEventDropped = 1, kViolation = 2, kFault = 3 };
+  enum Kind : int32_t { kEventApplied = 0, kEventDropped = 1, kViolation = 2, kFaultTick = 3 };
   int64_t tick = 0;
   int64_t time_ns = 0;
   int32_t kind = kEventApplied;
@@ -146,6 +154,14 @@ class Engine {
   const DurationHistogram& compute_histogram() const { return compute_; }
   const DurationHistogram& global_histogram() const { return global_; }
   int64_t global_passes() const { return global_passes_.load(std::memory_order_relaxed); }
+  /// Gaps between global passes longer than global_stall_ms, and the longest gap (ms).
+  int64_t global_stalls() const { return global_stalls_.load(std::memory_order_relaxed); }
+  double global_longest_gap_ms() const {
+    return 1e-6 * static_cast<double>(global_longest_gap_ns_.load(std::memory_order_relaxed));
+  }
+  /// Fault injection: the global stage's next pass starts injected_global_stall_ms late. A
+  /// lock-free atomic store, so a signal handler may call it.
+  void InjectGlobalStall() { inject_global_stall_.store(true, std::memory_order_relaxed); }
   /// eventfd the servo signals after pushing a wrench (non-blocking write; the bridge polls it).
   int wake_fd() const { return wake_fd_; }
   const ServoLoop& servo() const { return *servo_; }
@@ -176,6 +192,10 @@ class Engine {
   SpscRing<JournalEntry, 256> journal_;
   DurationHistogram compute_, global_;
   std::atomic<int64_t> global_passes_{0};
+  std::atomic<int64_t> global_stalls_{0};
+  std::atomic<int64_t> global_longest_gap_ns_{0};
+  std::atomic<bool> inject_global_stall_{false};
+  static_assert(std::atomic<bool>::is_always_lock_free);
   std::atomic<int64_t> events_pushed_{0};
   std::atomic<bool> running_{false};
   // The servo's doorbell (a futex word): rung by Publish, waited on while the servo sleeps.
