@@ -15,8 +15,9 @@ HandTrajectory HandTrajectory::BuiltIn(const std::string& name) {
   auto smooth = [](double s) { return s <= 0 ? 0.0 : s >= 1 ? 1.0 : s * s * (3 - 2 * s); };
   std::vector<std::pair<double, Eigen::Vector3d>> pts;
   if (name == "drag") {
-    // 1 s still, lift 6 mm in 2 s, then circles of 4 mm radius in the x–y plane, 5 s each.
-    for (double t = 0; t <= 60.0; t += 0.01) {
+    // 1 s still, lift 6 mm in 2 s, then circles of 4 mm radius in the x–y plane, 5 s each
+    // (twelve whole circles: it ends where the first began, so it loops from 3 s).
+    for (double t = 0; t <= 63.0 + 1e-9; t += 0.01) {
       Eigen::Vector3d x = Eigen::Vector3d::Zero();
       x.y() = 6 * mm * smooth((t - 1.0) / 2.0);
       if (t > 3.0) {
@@ -89,7 +90,18 @@ HandTrajectory HandTrajectory::FromCsv(const std::string& text, const std::strin
   return h;
 }
 
+void HandTrajectory::LoopFrom(double from) {
+  if (from >= 0.0 && !(from < t_.back())) {
+    throw std::invalid_argument(name_ + ": cannot loop from " + std::to_string(from) +
+                                " s, the trajectory ends at " + std::to_string(t_.back()) + " s");
+  }
+  loop_from_ = from;
+}
+
 Eigen::Vector3d HandTrajectory::At(double t) const {
+  if (loop_from_ >= 0.0 && t > t_.back()) {
+    t = loop_from_ + std::fmod(t - loop_from_, t_.back() - loop_from_);
+  }
   if (t <= t_.front()) return x_.front();
   if (t >= t_.back()) return x_.back();
   const size_t k = static_cast<size_t>(std::upper_bound(t_.begin(), t_.end(), t) - t_.begin());

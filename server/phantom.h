@@ -23,9 +23,14 @@ class HandTrajectory {
   static HandTrajectory FromCsv(const std::string& text, const std::string& where);
   Eigen::Vector3d At(double t) const;
   const std::string& name() const { return name_; }
+  /// Beyond its end the trajectory repeats from `from` (s) to its end (soak runs); "drag" is
+  /// periodic from 3 s (whole circles), so it loops without a step. A negative value holds the
+  /// end (the default). @throws std::invalid_argument if `from` is not before the end.
+  void LoopFrom(double from);
 
  private:
   std::string name_;
+  double loop_from_ = -1.0;
   std::vector<double> t_;
   std::vector<Eigen::Vector3d> x_;
 };

@@ -53,6 +53,7 @@ struct LatestWrench {
   int64_t seq = -1;
   int state = 0;
   int64_t received_ns = 0;  ///< this process's clock
+  double latency_us = 0.0;  ///< round trip of the state it answers (0 for timeout wrenches)
 };
 
 struct Receiver {
@@ -60,6 +61,14 @@ struct Receiver {
   std::vector<double> latency_us, ping_us;
   std::vector<int64_t> answered_seq;
   int64_t late = 0, bad = 0, foreign = 0, timeout_wrenches = 0, fault_wrenches = 0;
+  // The safety contract checked on every wrench of this session, on the server's clock
+  // (wrench_t.server_utime): |F| ≤ max_force, |ΔF| ≤ max_force_rate × Δt (docs/server.md).
+  double max_force = 3.3, max_force_rate = 500.0;
+  double wrench_force_max = 0.0, worst_rate_excess = 0.0;
+  int64_t over_max = 0, over_rate = 0;
+  double last_force[3] = {0, 0, 0};
+  int64_t last_server_utime = 0;
+  bool have_last = false;
   std::atomic<int64_t> first_answer_ns{0};
   int64_t device_id = 1, session = 0;
   double late_threshold_us = 1000.0;
@@ -82,12 +91,15 @@ struct Receiver {
       ++bad;
       return;
     }
+    CheckContract(m);
+    double round_trip = 0.0;
     if (m->state == 2) {
       ++timeout_wrenches;  // the server heard nothing from us: not an answer
     } else {
       if (m->state == 3) ++fault_wrenches;
       const double lat = 1e-3 * static_cast<double>(now / 1000 * 1000 - m->utime * 1000);
       latency_us.push_back(lat);
+      round_trip = lat;
       if (lat > late_threshold_us) ++late;
       answered_seq.push_back(m->seq);
       if (first_answer_ns.load() == 0) first_answer_ns.store(now);
@@ -98,7 +110,27 @@ struct Receiver {
     w.seq = m->seq;
     w.state = m->state;
     w.received_ns = now;
+    w.latency_us = round_trip;
     wrench.Write(w);
+  }
+  void CheckContract(const tangent::wrench_t* m) {
+    const double f = std::sqrt(m->force[0] * m->force[0] + m->force[1] * m->force[1] +
+                               m->force[2] * m->force[2]);
+    wrench_force_max = std::max(wrench_force_max, f);
+    if (f > max_force + 1e-9) ++over_max;
+    if (have_last) {
+      double step2 = 0.0;
+      for (int i = 0; i < 3; ++i)
+        step2 += (m->force[i] - last_force[i]) * (m->force[i] - last_force[i]);
+      // server_utime is in whole µs: a µs of rounding at each end.
+      const double dt = 1e-6 * static_cast<double>(m->server_utime - last_server_utime + 2);
+      const double excess = std::sqrt(step2) - max_force_rate * std::max(dt, 0.0);
+      worst_rate_excess = std::max(worst_rate_excess, excess);
+      if (excess > 1e-9) ++over_rate;
+    }
+    std::memcpy(last_force, m->force, sizeof(last_force));
+    last_server_utime = m->server_utime;
+    have_last = true;
   }
   void OnPong(const void* data, uint32_t size) {
     if (size != sizeof(int64_t)) return;
@@ -121,6 +153,8 @@ struct PhantomOptions {
   double duration = 10.0, rate = 1000.0, ping_rate = 100.0, coupling_stiffness = 300.0;
   double silence_at = -1.0, silence_for = 0.0;
   double watchdog_ms = 20.0, watchdog_rate = 500.0;
+  double max_force_rate = 500.0;  ///< the server's force-rate limit, N/s (checked on wrenches)
+  double loop_from = -1.0;
   int64_t device_id = 1, session = 0;
   int inject_bad = 0;
   bool status = false;
@@ -131,7 +165,9 @@ void AddOptions(CLI::App* app, PhantomOptions* o) {
   app->add_option("--lcm-url", o->url, "LCM URL");
   app->add_option("--trajectory", o->trajectory,
                   "built-in hand trajectory (drag, circle, pull, hold) or a CSV file t,x,y,z");
-  app->add_option("--duration", o->duration, "seconds")->check(CLI::Range(0.1, 3600.0));
+  app->add_option("--duration", o->duration, "seconds")->check(CLI::Range(0.1, 86400.0));
+  app->add_option("--loop-from", o->loop_from,
+                  "repeat the trajectory from this time (s) after its end (drag: 3; soak runs)");
   app->add_option("--rate", o->rate, "device rate, Hz")->check(CLI::Range(10.0, 10000.0));
   app->add_option("--ping-rate", o->ping_rate, "bare LCM ping-pong rate, Hz (0: off)");
   app->add_option("--log", o->csv_log, "CSV log of every device step");
@@ -156,6 +192,8 @@ void AddOptions(CLI::App* app, PhantomOptions* o) {
   app->add_option("--stats-channel", o->stats_ch);
   app->add_option("--mass", o->dm.mass, "device apparent mass, kg");
   app->add_option("--max-force", o->dm.max_force, "device force saturation, N");
+  app->add_option("--max-force-rate", o->max_force_rate,
+                  "the server's force-rate limit, N/s: every wrench is checked against it");
   app->add_option("--hand-stiffness", o->dm.hand_stiffness, "N/m");
   app->add_option("--hand-damping", o->dm.hand_damping, "N s/m");
   app->add_flag("--status", o->status, "live one-line status with a progress bar");
@@ -197,6 +235,7 @@ bool InjectBad(int64_t seq, int every, tangent::device_state_t* msg) {
 /// What the device loop counted.
 struct DriveTotals {
   int64_t sent = 0, sent_live = 0;
+  int64_t skipped_periods = 0;  ///< device periods missed while this process was not running
   std::vector<Eigen::Vector3d> forces;  ///< the force applied at each step
 };
 
@@ -206,7 +245,11 @@ DriveTotals DriveDevice(const PhantomOptions& o, const HandTrajectory& hand, lcm
                         Receiver* rx, DeviceModel* device,
                         tangent::server::DriverWatchdog* watchdog, int64_t start) {
   std::FILE* log = o.csv_log.empty() ? nullptr : std::fopen(o.csv_log.c_str(), "w");
-  if (log) std::fprintf(log, "t,seq,x,y,z,hand_x,hand_y,hand_z,fx,fy,fz,energy\n");
+  if (log) {
+    std::fprintf(log,
+                 "t,seq,x,y,z,hand_x,hand_y,hand_z,fx,fy,fz,energy,answered_seq,latency_us,"
+                 "wrench_state\n");
+  }
   DriveTotals totals;
   totals.forces.reserve(static_cast<size_t>(o.duration * o.rate) + 16);
   const double dt = 1.0 / o.rate;
@@ -216,6 +259,12 @@ DriveTotals DriveDevice(const PhantomOptions& o, const HandTrajectory& hand, lcm
   Eigen::Vector3d prev_hand = hand.At(0.0);
   for (int64_t k = 0; !g_stop.load(); ++k) {
     next += period;
+    // A device loop that was not run (descheduled, stopped) resumes at its period from now; it
+    // never sends the missed states in a burst (they would be stale, and a flood).
+    if (const int64_t behind = NowNs() - next; behind > 10 * period) {
+      totals.skipped_periods += behind / period;
+      next += behind / period * period;
+    }
     // Sleep then spin to the deadline (timer slack 1 ns).
     if (next - 200000 > NowNs()) SleepUntil(next - 200000);
     while (NowNs() < next) {
@@ -257,10 +306,11 @@ DriveTotals DriveDevice(const PhantomOptions& o, const HandTrajectory& hand, lcm
       next_ping = now + static_cast<int64_t>(1e9 / o.ping_rate);
     }
     if (log) {
-      std::fprintf(log, "%.4f,%lld,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.4f,%.4f,%.4f,%.6e\n", t,
-                   static_cast<long long>(msg.seq), device->position()[0], device->position()[1],
-                   device->position()[2], target[0], target[1], target[2], f[0], f[1], f[2],
-                   device->energy_from_server());
+      std::fprintf(
+          log, "%.4f,%lld,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.4f,%.4f,%.4f,%.6e,%lld,%.1f,%d\n", t,
+          static_cast<long long>(msg.seq), device->position()[0], device->position()[1],
+          device->position()[2], target[0], target[1], target[2], f[0], f[1], f[2],
+          device->energy_from_server(), static_cast<long long>(w.seq), w.latency_us, w.state);
     }
     if (o.status && k % 100 == 0) {
       const int bar = static_cast<int>(30.0 * t / o.duration);
@@ -310,8 +360,14 @@ void PrintSummary(const PhantomOptions& o, const HandTrajectory& hand, const Rec
               ping.p50, ping.p99, ping.n, lat.p50 - ping.p50);
   std::printf("force_mean_n=%.3f\nforce_max_n=%.3f\nforce_roughness_n=%.4f\n", mean_force,
               device.max_applied_force(), roughness);
+  std::printf("skipped_periods=%lld\n", static_cast<long long>(totals.skipped_periods));
   std::printf("energy_from_server_j=%.5f\npassivity_bound_j=%.5f\n", device.energy_from_server(),
               bound);
+  std::printf(
+      "wrench_force_max_n=%.4f\nover_max_force=%lld\nover_rate_limit=%lld\n"
+      "worst_rate_excess_n=%.2e\n",
+      rx.wrench_force_max, static_cast<long long>(rx.over_max),
+      static_cast<long long>(rx.over_rate), rx.worst_rate_excess);
   std::printf("loop_rate_hz=%.0f\ncontacts=%d\n", rx.loop_rate.load(), rx.contacts.load());
   const bool stable = passive && smooth && answered > 0;
   std::printf("verdict=%s\n", stable ? "STABLE" : "UNSTABLE");
@@ -334,6 +390,7 @@ int main(int argc, char** argv) {
   HandTrajectory hand;
   try {
     hand = LoadTrajectory(o.trajectory);
+    hand.LoopFrom(o.loop_from);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "tangent-phantom: %s\n", e.what());
     return 2;
@@ -356,6 +413,8 @@ int main(int argc, char** argv) {
   rx.device_id = o.device_id;
   rx.session = o.session;
   rx.late_threshold_us = 1e6 / o.rate;
+  rx.max_force = o.dm.max_force;
+  rx.max_force_rate = o.max_force_rate;
   rx.latency_us.reserve(static_cast<size_t>(o.duration * o.rate * 1.1) + 16);
   rx.answered_seq.reserve(rx.latency_us.capacity());
   tangent::server::LcmSubscriptions subs(&lcm);

@@ -2,6 +2,7 @@
 // stage (the other core) and the LCM bridge, until SIGINT/SIGTERM or --duration. Prints the load
 // log, then (with --status) a one-line status per second, and a key=value summary at exit.
 
+#include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <exception>
@@ -15,6 +16,12 @@
 namespace {
 std::atomic<bool> g_stop{false};
 void OnSignal(int) { g_stop.store(true); }
+/// --fault-injection: SIGUSR1 stalls the global stage once (scripts/faults.sh). Set before the
+/// handler is installed and cleared after it is removed; the handler only stores an atomic.
+std::atomic<tangent::server::Engine*> g_engine{nullptr};
+void OnStallSignal(int) {
+  if (tangent::server::Engine* e = g_engine.load()) e->InjectGlobalStall();
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -55,6 +62,9 @@ int main(int argc, char** argv) {
   app.add_option("--log", log_path, "log file (load log and one status line per second)");
   app.add_option("--duration", duration, "stop after this many seconds (0: run until a signal)");
   app.add_flag("--status", status, "print a live status line");
+  bool fault_injection = false;
+  app.add_flag("--fault-injection", fault_injection,
+               "testing only: SIGUSR1 stalls the global contact stage once for 100 ms");
   CLI11_PARSE(app, argc, argv);
 
   if (*device_id_option) bo.device_id = device_id;
@@ -84,9 +94,17 @@ int main(int argc, char** argv) {
         url.c_str());
     std::fflush(stdout);
     engine.Start();
+    if (fault_injection) {
+      g_engine.store(&engine);
+      std::signal(SIGUSR1, OnStallSignal);
+    }
     // The bridge (this thread) keeps off the servo's core: it shares the global stage's.
     PinToCore(eo.global_cpu);
     bridge.Run(g_stop, duration);
+    if (fault_injection) {
+      std::signal(SIGUSR1, SIG_IGN);
+      g_engine.store(nullptr);
+    }
     engine.Stop();
     std::printf("tangentd summary:\n%s", bridge.Report().c_str());
     if (log) std::fprintf(log, "summary:\n%s", bridge.Report().c_str());

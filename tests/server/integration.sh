@@ -58,6 +58,16 @@ grep ": violation " "$work/tangentd.log" | head -5 || true
 
 value() { grep -m1 "^$2=" "$work/$1.out" | cut -d= -f2; }
 fail() { echo "FAIL: $*"; exit 1; }
+# Under a sanitizer (scripts/tsan.sh sets TANGENT_SANITIZER_RUN) any report fails the case and
+# the criteria that measure speed are left out: an instrumented server is several times slower.
+sanitized=${TANGENT_SANITIZER_RUN:-}
+outputs=("$work/server.out" "$work/phantom.out")
+[ ! -f "$work/first.out" ] || outputs+=("$work/first.out")
+reports="ThreadSanitizer|AddressSanitizer|LeakSanitizer|runtime error:"
+if grep -qE "$reports" "${outputs[@]}"; then
+  grep -hE -A30 "$reports" "${outputs[@]}" | head -80
+  fail "sanitizer report (above)"
+fi
 [ "$status" -eq 0 ] || fail "tangentd exited with $status on SIGINT"
 grep -q "^tangentd summary:" "$work/server.out" || fail "no tangentd summary"
 sent=$(value phantom sent)
@@ -69,14 +79,18 @@ echo "accounting: phantom sent $sent; server accepted $accepted, rejected" \
   "$(value server lost_before_filter), unanswered $(value server unanswered); phantom answered $answered"
 awk -v f="$force_max" 'BEGIN { exit !(f <= 3.3 + 1e-9) }' || fail "force $force_max above 3.3 N"
 [ "$(value phantom bad_wrenches)" -eq 0 ] || fail "non-finite wrench received"
+[ "$(value phantom over_max_force)" -eq 0 ] || fail "$(value phantom over_max_force) wrenches above max_force"
+[ "$(value phantom over_rate_limit)" -eq 0 ] ||
+  fail "$(value phantom over_rate_limit) force steps beyond the rate limit (worst $(value phantom worst_rate_excess_n) N)"
 [ "$(value server faults)" -eq 0 ] || fail "the servo saw $(value server faults) faults"
 case $case_name in
   demo)
     [ "$(value phantom verdict)" = STABLE ] || fail "interaction not stable"
+    [ "$(value server contacts)" -ge 1 ] || fail "no contact tracked"
+    [ -z "$sanitized" ] || { echo "PASS: $case_name (sanitized: speed criteria left out)"; exit 0; }
     [ "$accepted" -ge 4000 ] || fail "only $accepted of $sent device states reached the server"
     awk -v a="$answered" -v s="$accepted" 'BEGIN { exit !(a >= 0.95 * s) }' ||
       fail "only $answered of the $accepted accepted device states answered"
-    [ "$(value server contacts)" -ge 1 ] || fail "no contact tracked"
     ;;
   timeout)
     [ "$(value server device_timeouts)" -ge 1 ] || fail "the 1 s silence was not seen as a timeout"
@@ -96,6 +110,7 @@ case $case_name in
     first_ms=$(value phantom first_answer_ms)
     awk -v t="$first_ms" 'BEGIN { exit !(t >= 0 && t <= 1000) }' ||
       fail "the restarted client waited $first_ms ms for its first answer (ramp time 1 s)"
+    [ -z "$sanitized" ] || { echo "PASS: $case_name (sanitized: speed criteria left out)"; exit 0; }
     awk -v a="$answered" -v s="$sent" 'BEGIN { exit !(a >= 0.9 * s) }' ||
       fail "the restarted client got only $answered answers to $sent states"
     ;;

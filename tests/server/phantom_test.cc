@@ -37,6 +37,19 @@ TEST(PhantomTest, TrajectoriesAndTheirErrors) {
   EXPECT_THROW(HandTrajectory::BuiltIn("wiggle"), std::invalid_argument);
 }
 
+TEST(PhantomTest, TheDragLoopsFromItsFirstCircleWithoutAStep) {
+  HandTrajectory h = HandTrajectory::BuiltIn("drag");
+  EXPECT_TRUE(h.At(70.0).isApprox(h.At(63.0)));  // holds the end by default
+  h.LoopFrom(3.0);
+  for (double t : {3.0, 4.2, 7.7, 12.5}) {
+    EXPECT_LT((h.At(t + 60.0) - h.At(t)).norm(), 1e-12) << t;
+    EXPECT_LT((h.At(t + 600.0) - h.At(t)).norm(), 1e-9) << t;
+  }
+  // Across the seam the hand moves as it does anywhere on the circle (1 ms apart).
+  EXPECT_LT((h.At(63.0005) - h.At(62.9995)).norm(), 1e-5);
+  EXPECT_THROW(h.LoopFrom(63.0), std::invalid_argument);
+}
+
 TEST(PhantomTest, DeviceSaturatesStaysInItsWorkspaceAndCountsEnergy) {
   DeviceModelOptions o;
   DeviceModel d(o);
