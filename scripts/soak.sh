@@ -1,0 +1,110 @@
+#!/usr/bin/env bash
+# Soak run (docs/reliability.md "Soak"): tangentd serves the paperclips while tangent-phantom
+# loops the demo's drag (whole circles from 3 s on) for N minutes (default 30), in a private
+# network namespace. Needs a build (bash scripts/build.sh, or either README command).
+#   bash scripts/soak.sh [--minutes N]
+# Samples tangentd's resident memory every 10 s and reads its per-second status lines, then
+# compares the first minute after warm-up with the last:
+#   * RSS growth from the end of the first minute to the end ≤ 1 MB;
+#   * no counter drifting: 0 faults, 0 device timeouts, 0 wrenches over the limits, the answered
+#     fraction, the loop rate and the tick p99 of the last minute within 10 % / 25 % of the first;
+#   * the violation and force statistics of the last minute the same as the first's (max
+#     violation below 1e-9 m in both; mean |F| within 10 %: the trajectory repeats exactly).
+# Writes build/soak/ (logs, rss.csv, report.md). A short run (--minutes 0.5) is ctest's
+# soak_smoke: it checks the script and the accounting, not the drift (a minute is the window).
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${TANGENT_BUILD_DIR:-$root/build}
+if [ -z "${TANGENT_IN_NETNS:-}" ]; then
+  export TANGENT_IN_NETNS=1
+  exec unshare -rn bash "$0" "$@"
+fi
+ip link set lo up
+ip route add 224.0.0.0/4 dev lo
+
+minutes=30
+while [ $# -gt 0 ]; do
+  case $1 in
+    --minutes) minutes=$2; shift 2 ;;
+    *) echo "soak.sh: unknown argument '$1' (expected --minutes N)" >&2; exit 2 ;;
+  esac
+done
+seconds=$(awk -v m="$minutes" 'BEGIN { printf "%d", m * 60 }')
+out=$build/soak
+rm -rf "$out" && mkdir -p "$out"
+
+"$build/server/tangentd" --scene "$root/scenes/paperclips.json" --log "$out/tangentd.log" \
+  > "$out/server.out" 2>&1 &
+server=$!
+trap 'kill -INT $server 2>/dev/null || true' EXIT
+for _ in $(seq 600); do
+  grep -q "^tangentd: scene" "$out/server.out" && break
+  kill -0 "$server" 2>/dev/null || { cat "$out/server.out"; echo "tangentd died at load"; exit 1; }
+  sleep 0.1
+done
+"$build/server/tangent-phantom" --duration "$seconds" --trajectory drag --loop-from 3 \
+  > "$out/phantom.out" 2>&1 &
+phantom=$!
+start=$(date +%s.%N)
+echo "t_s,rss_kb" > "$out/rss.csv"
+while kill -0 "$phantom" 2>/dev/null; do
+  rss=$(awk '/^VmRSS/ { print $2 }' "/proc/$server/status")
+  echo "$(awk -v s="$start" -v n="$(date +%s.%N)" 'BEGIN { printf "%.1f", n - s }'),$rss" >> "$out/rss.csv"
+  sleep 10 & wait $! || true
+done
+wait "$phantom"
+kill -INT "$server"
+wait "$server"
+trap - EXIT
+
+python3 - "$out" "$minutes" <<'EOF'
+import re, sys
+out, minutes = sys.argv[1], float(sys.argv[2])
+def summary(name):
+    return dict(l.strip().split("=", 1) for l in open(f"{out}/{name}.out") if re.match(r"^\w+=", l))
+server, phantom = summary("server"), summary("phantom")
+status = []
+for l in open(f"{out}/tangentd.log"):
+    m = re.match(r"t=([\d.]+)s rate=(\d+)Hz compute p50=([\d.]+)us p99=([\d.]+)us contacts=(\d+) "
+                 r"force=([\d.]+)N iter=[\d.]+ violation=([\de.+-]+) accepted=(\d+)", l)
+    if m:
+        status.append([float(x) for x in m.groups()])
+rss = [tuple(map(float, l.split(","))) for l in open(f"{out}/rss.csv").readlines()[1:]]
+window = 60.0 if minutes >= 3 else max(5.0, minutes * 60 / 4)
+t_end = status[-1][0]
+def stats(lo, hi):
+    rows = [r for r in status if lo < r[0] <= hi]
+    acc = rows[-1][7] - rows[0][7] if len(rows) > 1 else 0
+    return {"rate": sum(r[1] for r in rows) / len(rows), "p99": sorted(r[3] for r in rows)[len(rows) // 2],
+            "violation": max(r[6] for r in rows), "force": sum(r[5] for r in rows) / len(rows),
+            "accepted_per_s": acc / max(rows[-1][0] - rows[0][0], 1e-9)}
+warm = 10.0  # the scene settles and the ramp ends
+first, last = stats(warm, warm + window), stats(t_end - window, t_end)
+rss_warm = next(r for t, r in rss if t >= warm + window) if any(t >= warm + window for t, _ in rss) else rss[0][1]
+growth_kb = rss[-1][1] - rss_warm
+answered = int(phantom["answered"]) / max(int(server["device_messages"]), 1)
+drift = minutes >= 3  # shorter runs (soak_smoke) report the drift figures without judging them
+checks = [
+    ("RSS growth after warm-up ≤ 1 MB", growth_kb <= 1024 or not drift, f"{growth_kb:.0f} kB ({rss_warm:.0f} → {rss[-1][1]:.0f} kB)"),
+    ("0 faults", server["faults"] == "0", server["faults"]),
+    ("0 device timeouts", server["device_timeouts"] == "0", server["device_timeouts"]),
+    ("0 wrenches over max_force or the rate limit", phantom["over_max_force"] == "0" and phantom["over_rate_limit"] == "0",
+     f'{phantom["over_max_force"]} / {phantom["over_rate_limit"]}'),
+    ("answered ≥ 95 % of accepted", answered >= 0.95, f"{100 * answered:.2f} %"),
+    ("loop rate: last within 10 % of first", abs(last["rate"] / first["rate"] - 1) <= 0.10 or not drift, f'{first["rate"]:.0f} → {last["rate"]:.0f} Hz'),
+    ("tick p99 (median of the seconds): last within 25 % of first", last["p99"] <= 1.25 * first["p99"] + 1.0 or not drift, f'{first["p99"]:.1f} → {last["p99"]:.1f} µs'),
+    ("device states accepted per second: last within 10 % of first", abs(last["accepted_per_s"] / first["accepted_per_s"] - 1) <= 0.10 or not drift,
+     f'{first["accepted_per_s"]:.0f} → {last["accepted_per_s"]:.0f} /s'),
+    ("max violation below 1e-9 m in both", first["violation"] < 1e-9 and last["violation"] < 1e-9, f'{first["violation"]:.1e} → {last["violation"]:.1e} m'),
+    ("mean |F|: last within 10 % of first", abs(last["force"] - first["force"]) <= 0.10 * first["force"] + 0.01 or not drift, f'{first["force"]:.3f} → {last["force"]:.3f} N'),
+]
+lines = [f"Soak: {minutes:g} min of the looped drag on the paperclips; windows of {window:.0f} s "
+         f"(first after {warm:.0f} s of warm-up, last at the end).", "",
+         "| check | result | figures |", "| --- | --- | --- |"]
+lines += [f"| {name} | {'pass' if ok else 'FAIL'} | {fig} |" for name, ok, fig in checks]
+if not drift:
+    lines += ["", "(A short run: the drift rows are reported, not judged.)"]
+open(f"{out}/report.md", "w").write("\n".join(lines) + "\n")
+print("\n".join(lines))
+sys.exit(0 if all(ok for _, ok, _ in checks) else 1)
+EOF
