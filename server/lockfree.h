@@ -17,14 +17,14 @@ namespace tangent::server {
 /// One writer, any number of readers. Read copies the value out and retries while a write was
 /// in progress (odd sequence) or happened during the copy (sequence changed).
 ///
-/// The value is held as 64-bit words accessed with relaxed atomics, not by a plain memcpy: a
-/// reader's copy overlaps the writer's, and in C++ concurrent plain accesses to the same bytes
-/// are a data race, undefined behaviour even when the torn copy is then discarded. With atomic
-/// words there is no race; the fences order the words against the sequence (the writer's
-/// release fence before its first word, the reader's acquire fence after its last: Boehm, "Can
-/// seqlocks get along with programming language memory models?", MSPC 2012, Fig. 6). On x86-64
-/// a relaxed 64-bit load or store is the plain `mov` a memcpy would use, so this costs nothing,
-/// and ThreadSanitizer sees atomics, so it needs no annotation or suppression.
+/// The value is held as 64-bit words accessed with atomics, not by a plain memcpy: a reader's
+/// copy overlaps the writer's, and in C++ concurrent plain accesses to the same bytes are a data
+/// race, undefined behaviour even when the torn copy is then discarded. The writer stores the
+/// words with release after marking the write in progress (odd sequence); the reader loads them
+/// with acquire, so a reader that sees any word of a write in progress also sees the odd
+/// sequence (or a later one) on its second look, and discards the copy. No standalone fences
+/// (which ThreadSanitizer cannot model): on x86-64 these loads and stores are the plain `mov`s
+/// a memcpy would use, and the sanitizer sees the synchronisation exactly.
 template <typename T>
 class Seqlock {
   static_assert(std::is_trivially_copyable_v<T>, "Seqlock holds plain data");
@@ -33,8 +33,7 @@ class Seqlock {
   void Write(const T& value) {
     const unsigned s = seq_.load(std::memory_order_relaxed);
     seq_.store(s + 1, std::memory_order_relaxed);
-    std::atomic_thread_fence(std::memory_order_release);
-    CopyIn(value);
+    CopyIn(value);  // release stores: each is ordered after the odd sequence above
     seq_.store(s + 2, std::memory_order_release);
   }
   /// @return the number of writes so far (even), so a reader can tell a new value from one it
@@ -44,8 +43,7 @@ class Seqlock {
       const unsigned s0 = seq_.load(std::memory_order_acquire);
       if (s0 == 0) return 0;
       if (s0 & 1u) continue;
-      CopyOut(out);
-      std::atomic_thread_fence(std::memory_order_acquire);
+      CopyOut(out);  // acquire loads: the second look below is ordered after each
       if (seq_.load(std::memory_order_relaxed) == s0) return s0;
     }
   }
@@ -59,13 +57,13 @@ class Seqlock {
     for (size_t i = 0; i < kWords; ++i) {
       uint64_t w = 0;
       std::memcpy(&w, bytes + 8 * i, Bytes(i));
-      words_[i].store(w, std::memory_order_relaxed);
+      words_[i].store(w, std::memory_order_release);
     }
   }
   void CopyOut(T* v) const {
     auto* bytes = reinterpret_cast<unsigned char*>(v);
     for (size_t i = 0; i < kWords; ++i) {
-      const uint64_t w = words_[i].load(std::memory_order_relaxed);
+      const uint64_t w = words_[i].load(std::memory_order_acquire);
       std::memcpy(bytes + 8 * i, &w, Bytes(i));
     }
   }
