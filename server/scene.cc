@@ -495,7 +495,7 @@ std::unique_ptr<Scene> ParseScene(const std::string& text, const std::string& wh
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // syntax, and a number beyond double range (406)
     throw SceneError(where + ": not valid JSON: " + e.what());
   }
   const Node root{j, where, ""};
