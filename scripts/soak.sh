@@ -66,12 +66,16 @@ server, phantom = summary("server"), summary("phantom")
 status = []
 for l in open(f"{out}/tangentd.log"):
     m = re.match(r"t=([\d.]+)s rate=(\d+)Hz compute p50=([\d.]+)us p99=([\d.]+)us contacts=(\d+) "
-                 r"force=([\d.]+)N iter=[\d.]+ violation=([\de.+-]+) accepted=(\d+)", l)
+                 r"force=([\d.]+)N iter=[\d.]+ violation=([\de.+-]+) accepted=(\d+) "
+                 r"rejected=\d+ timeouts=(\d+)", l)
     if m:
         status.append([float(x) for x in m.groups()])
 rss = [tuple(map(float, l.split(","))) for l in open(f"{out}/rss.csv").readlines()[1:]]
 window = 60.0 if minutes >= 3 else max(5.0, minutes * 60 / 4)
-t_end = status[-1][0]
+# The run ends with the phantom: the last status second in which states were still accepted,
+# less a second (the server's lines after it show the device timing out, as it should).
+t_end = max(b[0] for a, b in zip(status, status[1:]) if b[7] > a[7]) - 1.0
+timeouts_in_run = int(max(r[8] for r in status if r[0] <= t_end))
 def stats(lo, hi):
     rows = [r for r in status if lo < r[0] <= hi]
     acc = rows[-1][7] - rows[0][7] if len(rows) > 1 else 0
@@ -87,7 +91,8 @@ drift = minutes >= 3  # shorter runs (soak_smoke) report the drift figures witho
 checks = [
     ("RSS growth after warm-up ≤ 1 MB", growth_kb <= 1024 or not drift, f"{growth_kb:.0f} kB ({rss_warm:.0f} → {rss[-1][1]:.0f} kB)"),
     ("0 faults", server["faults"] == "0", server["faults"]),
-    ("0 device timeouts", server["device_timeouts"] == "0", server["device_timeouts"]),
+    ("0 device timeouts while the client ran", timeouts_in_run == 0,
+     f'{timeouts_in_run} (the one at the end, when the client stops, is not counted)'),
     ("0 wrenches over max_force or the rate limit", phantom["over_max_force"] == "0" and phantom["over_rate_limit"] == "0",
      f'{phantom["over_max_force"]} / {phantom["over_rate_limit"]}'),
     ("answered ≥ 95 % of accepted", answered >= 0.95, f"{100 * answered:.2f} %"),
