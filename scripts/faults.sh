@@ -17,12 +17,9 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${TANGENT_BUILD_DIR:-$root/build}
-if [ -z "${TANGENT_IN_NETNS:-}" ]; then
-  export TANGENT_IN_NETNS=1
-  exec unshare -rn bash "$0" "$@"
-fi
-ip link set lo up
-ip route add 224.0.0.0/4 dev lo
+# shellcheck source=lib/live_server.sh
+source "$root/scripts/lib/live_server.sh"
+in_private_netns "$0" "$@"
 
 duration=8 fault_len=1.5 memory_cap_mib=512
 faults=()
@@ -49,14 +46,9 @@ run_fault() {
   rm -rf "$dir" && mkdir -p "$dir"
   if [ "$fault" = memory ]; then run=$((duration + 2)); fi
   if [ "$fault" = contact_burst ]; then scene=contact_burst trajectory=pull; fi
-  "$build/server/tangentd" --scene "$root/scenes/$scene.json" --fault-injection \
-    --log "$dir/tangentd.log" > "$dir/server.out" 2>&1 &
-  local server=$!
-  for _ in $(seq 600); do
-    grep -q "^tangentd: scene" "$dir/server.out" && break
-    kill -0 "$server" 2>/dev/null || { cat "$dir/server.out"; echo "tangentd died at load"; exit 1; }
-    sleep 0.1
-  done
+  start_tangentd "$dir/server.out" --scene "$root/scenes/$scene.json" --fault-injection \
+    --log "$dir/tangentd.log"
+  local server=$server_pid
   "$build/server/tangent-phantom" --duration "$run" --trajectory "$trajectory" \
     --log "$dir/phantom.csv" > "$dir/phantom.out" 2>&1 &
   local phantom=$! helpers=() t0 fault_start fault_end

@@ -15,12 +15,9 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${TANGENT_BUILD_DIR:-$root/build}
-if [ -z "${TANGENT_IN_NETNS:-}" ]; then
-  export TANGENT_IN_NETNS=1
-  exec unshare -rn bash "$0" "$@"
-fi
-ip link set lo up
-ip route add 224.0.0.0/4 dev lo
+# shellcheck source=lib/live_server.sh
+source "$root/scripts/lib/live_server.sh"
+in_private_netns "$0" "$@"
 
 minutes=30
 while [ $# -gt 0 ]; do
@@ -33,15 +30,9 @@ seconds=$(awk -v m="$minutes" 'BEGIN { printf "%d", m * 60 }')
 out=$build/soak
 rm -rf "$out" && mkdir -p "$out"
 
-"$build/server/tangentd" --scene "$root/scenes/paperclips.json" --log "$out/tangentd.log" \
-  > "$out/server.out" 2>&1 &
-server=$!
+start_tangentd "$out/server.out" --scene "$root/scenes/paperclips.json" --log "$out/tangentd.log"
+server=$server_pid
 trap 'kill -INT $server 2>/dev/null || true' EXIT
-for _ in $(seq 600); do
-  grep -q "^tangentd: scene" "$out/server.out" && break
-  kill -0 "$server" 2>/dev/null || { cat "$out/server.out"; echo "tangentd died at load"; exit 1; }
-  sleep 0.1
-done
 "$build/server/tangent-phantom" --duration "$seconds" --trajectory drag --loop-from 3 \
   > "$out/phantom.out" 2>&1 &
 phantom=$!
