@@ -3,6 +3,8 @@
 //   ours_track      one ContactTracker::Step (predictor + one corrector + closed-form u_q)
 //   ours_uq_closed  ContactJacobianClosedForm at the extremum
 //   ours_uq_ift     ContactJacobianImplicit at the extremum
+//   ours_relcurv    RelativeCurvatureOf at the extremum (the saddle test a touching solve and
+//                   each global-stage re-solve now add; compare with ours_uq_closed)
 //   occt_locate_ss  Open CASCADE's Extrema_GenLocateExtSS from the same seeds
 // then the ratios, and how often each local method reaches the right extremum from
 // seeds at increasing distance, for a separated and an interpenetrating placement.
@@ -19,6 +21,7 @@
 
 #include "bench/median_reporter.h"
 #include "contact/contact_jacobian.h"
+#include "contact/relative_curvature.h"
 #include "contact/tracker.h"
 #include "nurbs/primitives.h"
 #include "testing/contact_scenes.h"
@@ -140,6 +143,17 @@ void BM_Uq(benchmark::State& state) {
   }
 }
 
+void BM_RelativeCurvature(benchmark::State& state) {
+  const Scene& s = GetScene();
+  const Vector7d qf = s.QF(0.004);
+  const SurfaceSurfaceExtremum ref = Reference(qf);
+  const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(s.q_g);
+  nurbs::SpanHint hf, hg;
+  SurfacePairEval e;
+  EvaluatePair(s.f, pf, s.g, pg, ref.u, &hf, &hg, &e);
+  for (auto _ : state) benchmark::DoNotOptimize(RelativeCurvatureOf(e));
+}
+
 void ConvergenceReport() {
   const Scene& s = GetScene();
   std::printf(
@@ -183,6 +197,7 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("ours_track/rational_bicubic/servo_1ms", BM_OursTrack);
   benchmark::RegisterBenchmark("ours_uq_closed/rational_bicubic", BM_Uq<true>);
   benchmark::RegisterBenchmark("ours_uq_ift/rational_bicubic", BM_Uq<false>);
+  benchmark::RegisterBenchmark("ours_relcurv/rational_bicubic", BM_RelativeCurvature);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   tangent::bench::MedianReporter r;

@@ -9,6 +9,7 @@
 #include <Eigen/Cholesky>
 
 #include "contact/box_newton.h"
+#include "contact/relative_curvature.h"
 
 namespace tangent::contact {
 
@@ -540,12 +541,39 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
     out.beta = side * dist;
   }
   out.status = StatusOf(r);
-  // Touching: the minimum of the distance (zero), though the Hessian of ½|d|² is singular there.
-  out.kind = sys.touching && r.converged ? ExtremumKind::kMinimum : KindAt<4>(r, sys, lo, hi);
+  // Touching: the Hessian of ½|d|² is singular there (rank 2), so the relative curvature
+  // decides: the surfaces on either side of the tangent plane (a minimum of the distance, zero),
+  // or crossing near the point (a saddle: β ≥ 0 there would let them interpenetrate off it).
+  if (sys.touching && r.converged) {
+    out.kind = RelativeCurvatureOf(e).crossing ? ExtremumKind::kSaddle : ExtremumKind::kMinimum;
+  } else {
+    out.kind = KindAt<4>(r, sys, lo, hi);
+  }
   out.iterations = r.iterations;
   out.rcond = r.rcond;
   if (at_solution) *at_solution = e;
   return out;
+}
+
+double ParameterDistance(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
+                         const Eigen::Vector4d& x, const Eigen::Vector4d& y) {
+  const nurbs::NurbsSurface* s[4] = {&f, &f, &g, &g};
+  double d = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    const bool u_dir = i % 2 == 0;
+    const auto& kv = u_dir ? s[i]->knots_u() : s[i]->knots_v();
+    const double w = kv.domain_end() - kv.domain_begin();
+    double e = std::abs(x[i] - y[i]);
+    if (u_dir ? s[i]->periodic_u() : s[i]->periodic_v()) e = std::min(e, w - e);
+    d = std::max(d, e / w);
+  }
+  return d;
+}
+
+bool FoundAnotherExtremum(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
+                          const Eigen::Vector4d& from, const SurfaceSurfaceExtremum& solved,
+                          double held_distance) {
+  return ParameterDistance(f, g, from, solved.u) > kMaxResolveJump && solved.beta > held_distance;
 }
 
 SurfaceSurfaceExtremum ExtremumAt(const nurbs::NurbsSurface& f, const BodyPose& pose_f,

@@ -111,6 +111,27 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
                                            const ExtremalOptions& options = {},
                                            SurfacePairEval* at_solution = nullptr);
 
+/// Distance between two parameter points (u, v, s, t) of a pair: the largest of the four
+/// differences as a fraction of its domain's width, periodic directions the short way round.
+double ParameterDistance(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
+                         const Eigen::Vector4d& x, const Eigen::Vector4d& y);
+
+/// A full solve from a tracked contact's parameters that ends farther than this (a fraction of
+/// a domain, ParameterDistance) has left the contact's neighbourhood: the tracker's own bound on
+/// one correction (TrackerOptions::max_correction).
+inline constexpr double kMaxResolveJump = 0.05;
+
+/// Whether a solve from a tracked contact's parameters `from` found another extremum of the
+/// pair (the far side of a wire, the other branch of a nearly degenerate contact) rather than
+/// the contact moved: it ended more than kMaxResolveJump away and farther apart than the two
+/// points at `from` are now (`held_distance` = |f − g| there, which bounds the surfaces'
+/// distance from above, so an extremum beyond it is not their nearest pair). A far solve that
+/// ends nearer (a ball turned a long way in one step) is the contact moved. Taking another
+/// extremum would make β jump up, and a line search step through the surfaces.
+bool FoundAnotherExtremum(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
+                          const Eigen::Vector4d& from, const SurfaceSurfaceExtremum& solved,
+                          double held_distance);
+
 /// The contact equations' scaled residual at a pair evaluation with signed distance beta:
 /// |d·g_s|, |d·g_t| over L·max(|β|, 1e-3 L) with L = max(|g_s|, |g_t|), and |N_f·g_s|,
 /// |N_f·g_t| over |N_f| L (angles in radians). The tracker's and ExtremumAt's one measure.

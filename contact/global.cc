@@ -10,6 +10,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "contact/box_newton.h"
+#include "contact/relative_curvature.h"
+
 namespace tangent::contact {
 
 const char* ToString(ContactEvent::Reason r) {
@@ -22,6 +25,10 @@ const char* ToString(ContactEvent::Reason r) {
       return "left_domain";
     case ContactEvent::Reason::kLost:
       return "lost";
+    case ContactEvent::Reason::kSplit:
+      return "split";
+    case ContactEvent::Reason::kMerged:
+      return "merged";
   }
   return "?";
 }
@@ -560,6 +567,76 @@ size_t ClusterSeeds(GlobalContactStage::Impl& m, const GlobalOptions& options, i
   return n_tracked;
 }
 
+// A tracked contact is held to the servo's tracking residual (the contact equations' scaled
+// residual, optimizer::SurfaceContactTerm::kTrackedResidual); 1e-9 accepts what a snapshot
+// carries and stops short of a point one Newton step would move by more than ~1e-18.
+constexpr double kTrackedResidual = 1e-9;
+
+// Two contacts on the same points (m): far below any two distinct extrema a pass tells apart,
+// far above the solves' rounding (1e-15 of a part's size) and the servo's tracking error
+// (~1e-10 m).
+constexpr double kSamePoint = 1e-8;
+
+bool SamePoints(const GlobalContact& x, const GlobalContact& y) {
+  return x.a == y.a && x.b == y.b && (x.p_a - y.p_a).norm() < kSamePoint &&
+         (x.p_b - y.p_b).norm() < kSamePoint;
+}
+
+// The minima beside a saddle of the distance (relative_curvature.h): the surfaces cross along
+// the eigenvector w of M's negative eigenvalue, so a minimum (the deepest point of the crossing,
+// or the nearest of a near miss) lies on each side of the saddle along w. Newton from a seed
+// beside the saddle is drawn back to it (the nearest critical point), so each side first walks
+// f's point along w, in steps growing from 1 % of the curvature radius 1/max|λ|, while its
+// signed distance to g (a point–surface solve) keeps falling; Newton from the lowest point
+// then lands in the minimum's basin. A result that converges to a minimum (not itself crossing)
+// on that side, facing and within the activation and penetration bounds, is appended to *out
+// unless already there.
+void MinimaBeside(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                  const nurbs::NurbsSurface& g, const BodyPose& pose_g,
+                  const SurfaceSurfaceExtremum& saddle, const SurfacePairEval& at,
+                  const RelativeCurvature& rc, const GlobalOptions& options, int a, int b,
+                  std::vector<GlobalContact>* out) {
+  const double radius = 1.0 / std::max(rc.eigenvalues.cwiseAbs().maxCoeff(), 1e-300);
+  const Eigen::Vector4d step = ParameterStepAlong(at, rc.min_direction);
+  if (!step.allFinite()) return;
+  Eigen::Vector4d lo, hi;
+  lo << f.knots_u().domain_begin(), f.knots_v().domain_begin(), g.knots_u().domain_begin(),
+      g.knots_v().domain_begin();
+  hi << f.knots_u().domain_end(), f.knots_v().domain_end(), g.knots_u().domain_end(),
+      g.knots_v().domain_end();
+  const std::array<bool, 4> periodic = {f.periodic_u(), f.periodic_v(), g.periodic_u(),
+                                        g.periodic_v()};
+  for (const double side : {1.0, -1.0}) {
+    // Walk: ξ = 1 %, 2 %, 4 % ... of the radius (up to 2 radii) while the distance falls.
+    Eigen::Vector4d best = saddle.u;
+    double best_distance = saddle.beta;
+    for (double xi = 0.01 * radius; xi <= 2.0 * radius; xi *= 2.0) {
+      const Eigen::Vector4d x =
+          internal::ClampOrWrap<4>(saddle.u + side * xi * step, lo, hi, periodic);
+      const Eigen::Vector3d p_W = pose_f.Point(f.Evaluate(x[0], x[1], 0).S);
+      const PointSurfaceExtremum q = SolvePointSurface(p_W, g, pose_g, x.tail<2>());
+      if (q.status != ExtremalStatus::kConverged || !(q.distance < best_distance)) break;
+      best << x.head<2>(), q.u;
+      best_distance = q.distance;
+    }
+    if (best == saddle.u) continue;
+    SurfacePairEval q;
+    const SurfaceSurfaceExtremum e = SolveSurfaceSurface(f, pose_f, g, pose_g, best, {}, &q);
+    if (e.status != ExtremalStatus::kConverged || !(e.alignment < 0.0) ||
+        !(e.beta < options.activation) || !(e.beta > -options.max_penetration) ||
+        side * (e.p_g - saddle.p_g).dot(rc.min_direction) < kSamePoint) {
+      continue;
+    }
+    const RelativeCurvature k = RelativeCurvatureOf(q);
+    if (!k.valid || k.crossing) continue;
+    const GlobalContact c{a, b, e.u, e.beta, e.p_f, e.p_g};
+    if (std::none_of(out->begin(), out->end(),
+                     [&](const GlobalContact& o) { return SamePoints(o, c); })) {
+      out->push_back(c);
+    }
+  }
+}
+
 // Refines each new cluster m.accepted[n_tracked...] by the extremal Newton solver: from the mean
 // of its seeds (the middle of where the offsets overlap, near the closest or deepest pair), then
 // from its first seed and a few other members while that fails. (Measured: from the first seed
@@ -572,6 +649,7 @@ void RefineClusters(const GlobalContactStage::Impl& m, const GlobalOptions& opti
   const Watched& wb = m.watched[static_cast<size_t>(b)];
   for (size_t k = n_tracked; k < m.accepted.size(); ++k) {
     SurfaceSurfaceExtremum e;
+    SurfacePairEval at;
     bool ok = false;
     const Seed& cl = m.accepted[k];
     for (int attempt = 0; attempt < 2 + cl.n_members && !ok; ++attempt) {
@@ -579,19 +657,21 @@ void RefineClusters(const GlobalContactStage::Impl& m, const GlobalOptions& opti
       const Eigen::Vector4d seed = attempt == 0   ? ClusterMean(cl, domains)
                                    : attempt == 1 ? cl.u
                                                   : cl.members[static_cast<size_t>(attempt - 2)];
-      e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, seed);
+      e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, seed, {}, &at);
       ok = e.status == ExtremalStatus::kConverged && e.beta < options.activation &&
            e.beta > -options.max_penetration && e.alignment < 0.0;
     }
     if (!ok) continue;
-    bool duplicate = false;
-    for (const GlobalContact& f : *found) {
-      if (f.a == a && f.b == b && (f.p_a - e.p_f).norm() < 1e-8 && (f.p_b - e.p_g).norm() < 1e-8) {
-        duplicate = true;
-        break;
-      }
+    // A saddle of the distance is not a contact: the minima beside it are.
+    if (const RelativeCurvature rc = RelativeCurvatureOf(at); rc.crossing) {
+      MinimaBeside(*wa.s.surface, pa, *wb.s.surface, pb, e, at, rc, options, a, b, found);
+      continue;
     }
-    if (!duplicate) found->push_back({a, b, e.u, e.beta, e.p_f, e.p_g});
+    const GlobalContact c{a, b, e.u, e.beta, e.p_f, e.p_g};
+    if (std::none_of(found->begin(), found->end(),
+                     [&](const GlobalContact& f) { return SamePoints(f, c); })) {
+      found->push_back(c);
+    }
   }
 }
 
@@ -613,48 +693,86 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
 
 void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
                                 const std::vector<GlobalContact>& tracked,
-                                std::vector<ContactEvent>* events) const {
+                                std::vector<ContactEvent>* events) {
   const Impl& m = *impl_;
   const double far = options_.far_factor * options_.neglect_radius;
-  // Tracked contacts re-solved from their parameters (removals); found ones not tracked are
-  // added.
-  for (const GlobalContact& c : tracked) {
+  split_.clear();
+  removed_.assign(tracked.size(), 0);
+  // Whether tracked contact k re-solved to the points of an earlier one of its pair still kept.
+  auto same_as_earlier = [&](size_t k, const SurfaceSurfaceExtremum& e) {
+    const GlobalContact now{tracked[k].a, tracked[k].b, e.u, e.beta, e.p_f, e.p_g};
+    for (size_t j = 0; j < k; ++j) {
+      if (!removed_[j] && SamePoints(tracked[j], now)) return true;
+    }
+    return false;
+  };
+  // Tracked contacts re-solved from their parameters (removals, splits, merges); found ones not
+  // tracked are added.
+  for (size_t k = 0; k < tracked.size(); ++k) {
+    const GlobalContact& c = tracked[k];
     const Watched& wa = m.watched[static_cast<size_t>(c.a)];
     const Watched& wb = m.watched[static_cast<size_t>(c.b)];
-    const SurfaceSurfaceExtremum e =
-        SolveSurfaceSurface(*wa.s.surface, poses[static_cast<size_t>(wa.s.body)], *wb.s.surface,
-                            poses[static_cast<size_t>(wb.s.body)], c.u);
+    const BodyPose& pa = poses[static_cast<size_t>(wa.s.body)];
+    const BodyPose& pb = poses[static_cast<size_t>(wb.s.body)];
+    // The servo holds its contacts at extremal parameters (the snapshot's u and poses are one
+    // tick's): taken as they are when they still solve the contact equations, else re-solved.
+    // (Newton from an extremum that is nearly degenerate, as where two wires turn parallel,
+    // can take one step far away.)
+    SurfacePairEval at;
+    SurfaceSurfaceExtremum e =
+        ExtremumAt(*wa.s.surface, pa, *wb.s.surface, pb, c.u, kTrackedResidual, &at);
+    bool jumped = false;
+    if (e.status != ExtremalStatus::kConverged) {
+      const double held_distance = at.d.norm();
+      e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, c.u, {}, &at);
+      jumped = FoundAnotherExtremum(*wa.s.surface, *wb.s.surface, c.u, e, held_distance);
+    }
     // A removal names the contact by the parameters it is tracked at (what the owner of the
     // contact matches it by), with the distance and points re-solved now.
     GlobalContact now{c.a, c.b, c.u, e.beta, e.p_f, e.p_g};
+    auto remove = [&](ContactEvent::Reason reason) {
+      events->push_back({ContactEvent::Kind::kRemoved, reason, now});
+      removed_[k] = 1;
+    };
     // kSingular is not a loss: a pair held at β ≈ 0 (every active contact, within the servo's
     // 1e-10 m) makes the Newton matrix nearly rank deficient, the more so at a pole, and the
     // re-solve ends converged-but-singular on the same pair. Removing it there made contacts
     // at domes' poles chatter (removed and found again every pass: scripts/faults.sh
     // contact_burst); the servo's tracker holds them exactly, and separation still removes them.
     if (e.status == ExtremalStatus::kAtBoundary) {
-      events->push_back({ContactEvent::Kind::kRemoved, ContactEvent::Reason::kLeftDomain, now});
-    } else if (e.status != ExtremalStatus::kConverged && e.status != ExtremalStatus::kSingular) {
-      events->push_back({ContactEvent::Kind::kRemoved, ContactEvent::Reason::kLost, now});
+      remove(ContactEvent::Reason::kLeftDomain);
+    } else if ((e.status != ExtremalStatus::kConverged && e.status != ExtremalStatus::kSingular) ||
+               jumped) {
+      remove(ContactEvent::Reason::kLost);
     } else if (e.beta > options_.release) {
-      events->push_back({ContactEvent::Kind::kRemoved, ContactEvent::Reason::kSeparated, now});
+      remove(ContactEvent::Reason::kSeparated);
+    } else if (same_as_earlier(k, e)) {
+      // Two tracked contacts on one point (the minima of a split came back together).
+      remove(ContactEvent::Reason::kMerged);
+    } else if (const RelativeCurvature rc = RelativeCurvatureOf(at); rc.crossing) {
+      // The pair the contact follows turned from a minimum into a saddle (a pitchfork: e.g.
+      // two interlocked wires turned until one lies in the other's bend, tighter than itself);
+      // β ≥ 0 there no longer keeps the surfaces apart. The minima either side replace it.
+      remove(ContactEvent::Reason::kSplit);
+      MinimaBeside(*wa.s.surface, pa, *wb.s.surface, pb, e, at, rc, options_, c.a, c.b, &split_);
     }
   }
   for (const GlobalContact& f : found_) {
     bool known = false;
-    for (const GlobalContact& c : tracked) {
-      if (c.a != f.a || c.b != f.b) continue;
+    for (size_t k = 0; k < tracked.size() && !known; ++k) {
+      const GlobalContact& c = tracked[k];
+      if (removed_[k] || c.a != f.a || c.b != f.b) continue;
       const Watched& wa = m.watched[static_cast<size_t>(f.a)];
       const Watched& wb = m.watched[static_cast<size_t>(f.b)];
-      if (wa.Along(c.u.head<2>(), f.u.head<2>()) <= far &&
-          wb.Along(c.u.tail<2>(), f.u.tail<2>()) <= far) {
-        known = true;
-        break;
-      }
+      known = wa.Along(c.u.head<2>(), f.u.head<2>()) <= far &&
+              wb.Along(c.u.tail<2>(), f.u.tail<2>()) <= far;
     }
+    for (const GlobalContact& s : split_) known = known || SamePoints(s, f);
     if (!known)
       events->push_back({ContactEvent::Kind::kAdded, ContactEvent::Reason::kApproached, f});
   }
+  for (const GlobalContact& s : split_)
+    events->push_back({ContactEvent::Kind::kAdded, ContactEvent::Reason::kSplit, s});
 }
 
 void GlobalContactStage::Run(const std::vector<BodyPose>& poses,

@@ -64,7 +64,11 @@ struct GlobalContact {
 
 struct ContactEvent {
   enum class Kind { kAdded, kRemoved };
-  enum class Reason { kApproached, kSeparated, kLeftDomain, kLost };
+  /// kSplit: a tracked contact that became a saddle of the distance (the surfaces cross near
+  /// it; relative_curvature.h) is removed and the minima on either side are added, all with
+  /// this reason. kMerged: two tracked contacts of a pair re-solved to one point (the minima of a
+  /// split came back together): the later one is removed.
+  enum class Reason { kApproached, kSeparated, kLeftDomain, kLost, kSplit, kMerged };
   Kind kind = Kind::kAdded;
   Reason reason = Reason::kApproached;
   GlobalContact contact;
@@ -113,13 +117,16 @@ class GlobalContactStage {
   /// clustered outside the spheres of neglect, clusters refined into contacts (found_).
   void FindContacts(int a, int b, size_t first, size_t last, const std::vector<BodyPose>& poses,
                     const std::vector<GlobalContact>& tracked, GlobalStats* st);
-  /// 5. Events with hysteresis: tracked contacts re-solved (removals), found ones added.
+  /// 5. Events with hysteresis: tracked contacts re-solved (removals; a saddle split into the
+  /// minima beside it, two at one point merged), found ones added.
   void Events(const std::vector<BodyPose>& poses, const std::vector<GlobalContact>& tracked,
-              std::vector<ContactEvent>* events) const;
+              std::vector<ContactEvent>* events);
 
   std::unique_ptr<Impl> impl_;
   GlobalOptions options_;
   std::vector<GlobalContact> found_;
+  std::vector<GlobalContact> split_;  ///< minima beside tracked saddles (Events' workspace)
+  std::vector<char> removed_;         ///< per tracked contact, removed this pass
 };
 
 }  // namespace tangent::contact

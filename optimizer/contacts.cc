@@ -70,7 +70,23 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
                                                                            : st->u;
     st->ext = contact::SolveSurfaceSurface(*f_, pf, *g_, pg, start, {}, &st->eval);
     ++st->solves;
-    st->tracking = st->ext.status == contact::ExtremalStatus::kConverged &&
+    bool held = false;
+    // (The held pair is evaluated only after a far solve: the cheap test first.)
+    if (st->valid &&
+        contact::ParameterDistance(*f_, *g_, start, st->ext.u) > contact::kMaxResolveJump) {
+      contact::SurfacePairEval held_eval;
+      const contact::SurfaceSurfaceExtremum at_start =
+          contact::ExtremumAt(*f_, pf, *g_, pg, start, kTrackedResidual, &held_eval);
+      if (contact::FoundAnotherExtremum(*f_, *g_, start, st->ext, held_eval.d.norm())) {
+        // Not this contact. Hold the last parameters: β = d·n there, continuous in the poses,
+        // until the global stage re-finds the contact.
+        ++st->jumps;
+        st->ext = at_start;
+        st->eval = held_eval;
+        held = true;
+      }
+    }
+    st->tracking = !held && st->ext.status == contact::ExtremalStatus::kConverged &&
                    st->tracker.Reset(pf.q, pg.q, st->ext.u) == contact::TrackStatus::kTracked;
   }
   st->u = st->ext.u;

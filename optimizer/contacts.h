@@ -43,7 +43,11 @@ class SurfaceContactTerm final : public Term {
     int64_t tracked_steps = 0;  ///< evaluations answered by the tracker
     int64_t solves = 0;         ///< evaluations that needed a full solve
     int64_t lost = 0;           ///< tracker steps that reported `lost` (then solved)
-    Vector7d q_f, q_g;          ///< poses of the last evaluation
+    /// Solves that found another extremum (contact::FoundAnotherExtremum): the pair is then held
+    /// at its last parameters (β = d·n there, continuous in the poses) until the global stage
+    /// re-finds the contact.
+    int64_t jumps = 0;
+    Vector7d q_f, q_g;  ///< poses of the last evaluation
     bool valid = false;
     contact::SurfaceSurfaceExtremum ext;
     contact::SurfacePairEval eval;

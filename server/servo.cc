@@ -13,22 +13,9 @@ namespace tangent::server {
 
 namespace {
 
-// Distance between two (u, v, s, t): the largest of the four differences as a fraction of its
-// domain's width, periodic directions wrapped.
-double ParameterDistance(const nurbs::NurbsSurface& a, const nurbs::NurbsSurface& b,
-                         const Eigen::Vector4d& x, const Eigen::Vector4d& y) {
-  const nurbs::NurbsSurface* s[4] = {&a, &a, &b, &b};
-  double d = 0.0;
-  for (int i = 0; i < 4; ++i) {
-    const bool u_dir = i % 2 == 0;
-    const auto& kv = u_dir ? s[i]->knots_u() : s[i]->knots_v();
-    const double w = kv.domain_end() - kv.domain_begin();
-    double e = std::abs(x[i] - y[i]);
-    if (u_dir ? s[i]->periodic_u() : s[i]->periodic_v()) e = std::min(e, w - e);
-    d = std::max(d, e / w);
-  }
-  return d;
-}
+// Parameters of one contact, as a fraction of the domains (ParameterDistance): 1e-6 of a
+// domain is ~1e-8 m on a part of centimetres, the global stage's own same-point bar.
+constexpr double kSameContactParameters = 1e-6;
 
 }  // namespace
 
@@ -186,9 +173,9 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
       if (!free) free = &s;
       continue;
     }
-    const double d = ParameterDistance(scene_->surfaces[static_cast<size_t>(lo)].surface,
-                                       scene_->surfaces[static_cast<size_t>(hi)].surface,
-                                       s.state->extremum().u, u);
+    const double d = contact::ParameterDistance(scene_->surfaces[static_cast<size_t>(lo)].surface,
+                                                scene_->surfaces[static_cast<size_t>(hi)].surface,
+                                                s.state->extremum().u, u);
     if (d < nearest_d) {
       nearest_d = d;
       nearest = &s;
@@ -202,7 +189,11 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
     nearest->state->Deactivate();
     return true;
   }
-  if (nearest && nearest_d < 0.03) return true;  // already tracked (the event raced a snapshot)
+  // Already tracked: the same contact added twice. The engine runs a pass only on a snapshot
+  // that has taken every earlier event, so this is a second line of defence; it must not merge
+  // distinct contacts close together (the minima either side of a split saddle start a few
+  // 1e-3 of a domain apart), hence a bar at the stage's own same-point resolution.
+  if (nearest && nearest_d < kSameContactParameters) return true;
   if (!free) return false;
   free->state->Activate(u);
   return true;

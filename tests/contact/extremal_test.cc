@@ -7,6 +7,7 @@
 
 #include <numbers>
 
+#include "nurbs/primitives.h"
 #include "testing/contact_scenes.h"
 
 namespace tangent::contact {
@@ -206,6 +207,31 @@ TEST(ExtremalTest, CurveSurfaceArcAboveSphere) {
   EXPECT_NEAR(e.beta, std::hypot(0.02, 0.08) - 0.05, kPosTol);
   EXPECT_NEAR(e.u[2], 0.5, 1e-12);
   EXPECT_EQ(e.kind, ExtremumKind::kMinimum);
+}
+
+// The parameter distance (periodic directions the short way round) and the rule that tells a
+// re-solve that found another extremum of the pair from the contact moved: far (beyond
+// kMaxResolveJump) and farther apart than the two points at the start now are.
+TEST(ExtremalTest, ParameterDistanceAndAnotherExtremum) {
+  const nurbs::NurbsSurface torus = nurbs::MakeTorus(0.05, 0.01);  // periodic both ways
+  const nurbs::NurbsSurface patch = nurbs::MakeShearedPatch(0.3, 0.2, 0.01, true);  // [0,1]²
+  ASSERT_TRUE(torus.periodic_u() && torus.periodic_v());
+  ASSERT_FALSE(patch.periodic_u() || patch.periodic_v());
+  const Eigen::Vector4d x(0.99, 0.5, 0.2, 0.5);
+  // Across the torus seam 0.99 → 0.02 is 0.03 of the domain, not 0.97; the patch's 0.2 → 0.9
+  // is 0.7.
+  EXPECT_NEAR(ParameterDistance(torus, patch, x, Eigen::Vector4d(0.02, 0.5, 0.2, 0.5)), 0.03,
+              1e-15);
+  EXPECT_NEAR(ParameterDistance(torus, patch, x, Eigen::Vector4d(0.99, 0.5, 0.9, 0.5)), 0.7, 1e-15);
+  SurfaceSurfaceExtremum far_and_farther, far_and_nearer, near_and_farther;
+  far_and_farther.u = far_and_nearer.u = Eigen::Vector4d(0.99, 0.5, 0.3, 0.5);
+  near_and_farther.u = Eigen::Vector4d(0.02, 0.5, 0.2, 0.5);
+  far_and_farther.beta = near_and_farther.beta = 2e-3;
+  far_and_nearer.beta = 1e-4;
+  const double held_distance = 1e-3;
+  EXPECT_TRUE(FoundAnotherExtremum(torus, patch, x, far_and_farther, held_distance));
+  EXPECT_FALSE(FoundAnotherExtremum(torus, patch, x, far_and_nearer, held_distance));
+  EXPECT_FALSE(FoundAnotherExtremum(torus, patch, x, near_and_farther, held_distance));
 }
 
 }  // namespace

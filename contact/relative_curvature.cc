@@ -1,0 +1,67 @@
+#include "contact/relative_curvature.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+namespace tangent::contact {
+
+bool ShapeOperator(const PlacedSurfacePoint& p, Eigen::Matrix3d* K_W) {
+  K_W->setZero();
+  const nurbs::SurfacePoint& s = p.world;
+  const double N = p.N_W.norm();
+  // A pole: the chart's T loses rank (|S_u × S_v| → 0) and I⁻¹ blows up.
+  if (p.pole || !(N > 1e-12 * s.S_u.squaredNorm() + 1e-12 * s.S_v.squaredNorm())) return false;
+  const Eigen::Vector3d n = p.N_W / N;
+  Eigen::Matrix<double, 3, 2> T;
+  T << s.S_u, s.S_v;
+  const Eigen::Matrix2d I = T.transpose() * T;
+  Eigen::Matrix2d II;
+  II << s.S_uu.dot(n), s.S_uv.dot(n), s.S_uv.dot(n), s.S_vv.dot(n);
+  const Eigen::Matrix2d I_inv = I.inverse();
+  *K_W = -(T * I_inv * II * I_inv * T.transpose());
+  return K_W->allFinite();
+}
+
+RelativeCurvature RelativeCurvatureOf(const SurfacePairEval& e) {
+  RelativeCurvature out;
+  Eigen::Matrix3d K_f, K_g;
+  if (!ShapeOperator(e.f, &K_f) || !ShapeOperator(e.g, &K_g)) return out;
+  const Eigen::Vector3d n_g = e.g.N_W.normalized();
+  const Eigen::Vector3d n_f = e.f.N_W.normalized();
+  // Facing normals (an extremum of facing surfaces): n_f = −n_g up to the solve's tolerance.
+  if (!(n_f.dot(n_g) < 0.0)) return out;
+  const Eigen::Vector3d x = e.g.world.S_u.normalized();
+  const Eigen::Vector3d y = n_g.cross(x);
+  Eigen::Matrix<double, 3, 2> P;
+  P << x, y;
+  // g offset by β (the surface f touches at the extremum): K_g (1 + β K_g)⁻¹ on the tangent
+  // plane, in the frame (x, y).
+  const double beta = e.d.dot(n_g);
+  const Eigen::Matrix2d k_g = P.transpose() * K_g * P;
+  const Eigen::Matrix2d offset = Eigen::Matrix2d::Identity() + beta * k_g;
+  if (!(std::abs(offset.determinant()) > 1e-9)) return out;
+  const Eigen::Matrix2d M = P.transpose() * K_f * P + k_g * offset.inverse();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(0.5 * (M + M.transpose()));
+  out.eigenvalues = es.eigenvalues();
+  out.min_direction = (P * es.eigenvectors().col(0)).normalized();
+  const double scale = out.eigenvalues.cwiseAbs().maxCoeff();
+  out.valid = out.eigenvalues.allFinite() && out.min_direction.allFinite();
+  out.crossing = out.valid && out.eigenvalues[0] < -kCrossingTolerance * scale;
+  return out;
+}
+
+Eigen::Vector4d ParameterStepAlong(const SurfacePairEval& e, const Eigen::Vector3d& w) {
+  Eigen::Vector4d step;
+  for (int side = 0; side < 2; ++side) {
+    const nurbs::SurfacePoint& s = side == 0 ? e.f.world : e.g.world;
+    Eigen::Matrix<double, 3, 2> T;
+    T << s.S_u, s.S_v;
+    step.segment<2>(2 * side) = (T.transpose() * T).inverse() * (T.transpose() * w);
+  }
+  return step;
+}
+
+}  // namespace tangent::contact
