@@ -34,7 +34,7 @@ struct RelativeCurvature {
   /// false at a pole of either surface, with normals not facing, or at a focal distance
   /// (1 + β K_g singular)
   bool valid = false;
-  Eigen::Vector2d eigenvalues;   ///< of M, ascending (1/m)
+  Eigen::Vector2d eigenvalues;    ///< of M, ascending (1/m)
   Eigen::Vector3d min_direction;  ///< unit world tangent of the smaller eigenvalue
   /// The saddle test: λ_min < −kCrossingTolerance · max|λ|. Relative, since M's entries carry
   /// the rounding of second derivatives (~1e-10 relative from the span forms) and a saddle that

@@ -37,10 +37,16 @@ Eigen::VectorXd Mechanism::InitialCoordinates() const {
 }
 
 void Mechanism::Poses(const Eigen::VectorXd& q, std::vector<BodyPose>* poses) const {
+  // Fixed bodies' poses never change: written when the vector is sized, kept after (a scene's
+  // idle parts then cost nothing per evaluation).
+  const bool sized = poses->size() == static_cast<size_t>(num_bodies());
   poses->resize(static_cast<size_t>(num_bodies()));
   for (int i = 0; i < num_bodies(); ++i) {
-    const Vector7d c = offset(i) >= 0 ? Vector7d(q.segment<7>(offset(i))) : body(i).pose;
-    (*poses)[static_cast<size_t>(i)] = BodyPose::FromCoordinates(c);
+    if (offset(i) >= 0) {
+      (*poses)[static_cast<size_t>(i)] = BodyPose::FromCoordinates(q.segment<7>(offset(i)));
+    } else if (!sized) {
+      (*poses)[static_cast<size_t>(i)] = BodyPose::FromCoordinates(body(i).pose);
+    }
   }
 }
 

@@ -42,7 +42,8 @@ class Mechanism {
   /// The initial coordinate vector (moving bodies' poses).
   Eigen::VectorXd InitialCoordinates() const;
   /// Poses of all bodies for coordinates q (fixed bodies keep theirs). Allocation free when
-  /// `poses` already has num_bodies() entries.
+  /// `poses` already has num_bodies() entries; fixed bodies' entries are written only when the
+  /// vector is sized, so pass a vector this mechanism fills (not one of another's size).
   void Poses(const Eigen::VectorXd& q, std::vector<BodyPose>* poses) const;
   /// Kinetic-energy metric diagonal blocks (7 x 7 per moving body, rigidity applied), for
   /// ½ q̇ᵀ M q̇ = Σ ½ m |ṗ|² + ½ w_Bᵀ I_B w_B with w_B = G(Q) Q̇ at q.

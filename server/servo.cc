@@ -17,6 +17,42 @@ namespace {
 // domain is ~1e-8 m on a part of centimetres, the global stage's own same-point bar.
 constexpr double kSameContactParameters = 1e-6;
 
+// The mechanism the servo models: the scene's, with every body nothing acts on (no joint, no
+// declared contact pair, not grasped, in no objective) held fixed at its pose. Such a body can
+// never move, so it gets no coordinates, no metric block and no solver work: a scene that
+// declares twenty parts but lets three touch costs what the three cost (docs/server.md, "Model
+// only what a scene needs").
+optimizer::Mechanism ModelledMechanism(const Scene& scene) {
+  const optimizer::Mechanism& m = scene.mechanism;
+  std::vector<char> acted(static_cast<size_t>(m.num_bodies()), 0);
+  auto mark = [&](int body) {
+    if (body >= 0) acted[static_cast<size_t>(body)] = 1;
+  };
+  auto mark_term = [&](const optimizer::TermPtr& t) {
+    if (t) {
+      mark(t->body_a());
+      mark(t->body_b());
+    }
+  };
+  for (const JointSpec& j : scene.joints) {
+    mark_term(j.term);
+    mark_term(j.limits);
+  }
+  for (const ContactPairSpec& pair : scene.pairs) {
+    mark(scene.surfaces[static_cast<size_t>(pair.surface_a)].body);
+    mark(scene.surfaces[static_cast<size_t>(pair.surface_b)].body);
+  }
+  mark(scene.grasp.body);
+  for (const ObjectiveSpec& o : scene.objectives) mark_term(o.term);
+  optimizer::Mechanism modelled;
+  for (int i = 0; i < m.num_bodies(); ++i) {
+    optimizer::Body b = m.body(i);
+    b.fixed = b.fixed || !acted[static_cast<size_t>(i)];
+    modelled.AddBody(b);
+  }
+  return modelled;
+}
+
 }  // namespace
 
 ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
@@ -28,15 +64,15 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   if (scene->mechanism.num_bodies() > kMaxBodies) {
     throw SceneError(scene->path + ": more than " + std::to_string(kMaxBodies) + " bodies");
   }
-  problem_ = std::make_unique<optimizer::Problem>(scene->mechanism);
+  problem_ = std::make_unique<optimizer::Problem>(ModelledMechanism(*scene));
   optimizer::Problem& p = *problem_;
   p.set_least_astonishment(scene->least_astonishment);
   for (const JointSpec& j : scene->joints) {
     p.AddEquality(j.term);
     if (j.limits) p.AddInequality(j.limits);
   }
-  q_ = scene->mechanism.InitialCoordinates();
-  scene->mechanism.Poses(q_, &poses_);
+  q_ = p.mechanism().InitialCoordinates();
+  p.mechanism().Poses(q_, &poses_);
 
   int slot_count = 0;
   for (const ContactPairSpec& pair : scene->pairs) slot_count += pair.max_contacts;
@@ -131,7 +167,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   solver_->Reset();
   solver_->set_options(so);
   solver_->Solve(&q_);
-  scene->mechanism.Poses(q_, &poses_);
+  p.mechanism().Poses(q_, &poses_);
   device_origin_ = scene->device.origin_given ? scene->device.origin : GraspPoint();
   target_ = GraspPoint();
   grasp_state_->target = target_;
@@ -441,7 +477,7 @@ bool ServoLoop::MoveScene(const DeviceSample* fresh_device, double dt, const Inj
     good_violation_ = st.max_violation;
     out->violation = st.max_violation;
   }
-  scene_->mechanism.Poses(q_, &poses_);
+  problem_->mechanism().Poses(q_, &poses_);
   out->fault = fault;
   out->iterations = st.iterations;
   out->kkt = st.kkt_residual;

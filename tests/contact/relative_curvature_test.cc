@@ -24,7 +24,8 @@ namespace {
 
 constexpr double mm = 1e-3;
 
-Vector7d Pose(const Eigen::Vector3d& p, const Eigen::Quaterniond& Q = Eigen::Quaterniond::Identity()) {
+Vector7d Pose(const Eigen::Vector3d& p,
+              const Eigen::Quaterniond& Q = Eigen::Quaterniond::Identity()) {
   Vector7d q;
   q << p, Q.w(), Q.x(), Q.y(), Q.z();
   return q;
@@ -87,8 +88,8 @@ TEST(ShapeOperatorTest, UndefinedAtAPole) {
   const nurbs::NurbsSurface sphere = nurbs::MakeSphere(Eigen::Vector3d::Zero(), 0.02);
   nurbs::SpanHint hint;
   PlacedSurfacePoint p;
-  EvaluatePlaced(sphere, BodyPose::FromCoordinates(Pose(Eigen::Vector3d::Zero())), 0.3, 0.0,
-                 &hint, &p);
+  EvaluatePlaced(sphere, BodyPose::FromCoordinates(Pose(Eigen::Vector3d::Zero())), 0.3, 0.0, &hint,
+                 &p);
   Eigen::Matrix3d K;
   EXPECT_FALSE(ShapeOperator(p, &K));
   EXPECT_EQ(K, Eigen::Matrix3d::Zero());
@@ -102,7 +103,8 @@ TEST(RelativeCurvatureTest, AnalyticPairs) {
   const nurbs::NurbsSurface s2 = nurbs::MakeSphere(Eigen::Vector3d::Zero(), R2);
   const nurbs::NurbsSurface c1 = nurbs::MakeCylinder(r, 0.1);
   const nurbs::NurbsSurface c2 = nurbs::MakeCylinder(1.5 * r, 0.1);
-  const Eigen::Quaterniond about_x(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()));
+  const Eigen::Quaterniond about_x(
+      Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()));
   struct Case {
     const char* name;
     const nurbs::NurbsSurface *f, *g;
@@ -119,8 +121,7 @@ TEST(RelativeCurvatureTest, AnalyticPairs) {
        Eigen::Vector2d(1 / (1.5 * r), 1 / r), false},
       // Parallel axes: a line contact, M singular but not indefinite.
       {"parallel cylinders", &c1, &c2, Pose(Eigen::Vector3d(0, 0, -0.05)),
-       Pose(Eigen::Vector3d(2.5 * r, 0, -0.05)), Eigen::Vector2d(0, 1 / r + 1 / (1.5 * r)),
-       false},
+       Pose(Eigen::Vector3d(2.5 * r, 0, -0.05)), Eigen::Vector2d(0, 1 / r + 1 / (1.5 * r)), false},
   };
   const Eigen::Quaterniond turn(Eigen::AngleAxisd(1.1, Eigen::Vector3d(-1, 3, 2).normalized()));
   for (const Case& c : cases) {
@@ -159,17 +160,17 @@ struct LinkedTori {
   double R1, r1, R2, r2, turn = 0.0;
   nurbs::NurbsSurface t1 = nurbs::MakeTorus(R1, r1), t2 = nurbs::MakeTorus(R2, r2);
   BodyPose p1 = BodyPose::FromCoordinates(Pose(Eigen::Vector3d::Zero()));
-  BodyPose p2 = BodyPose::FromCoordinates(
-      Pose(Eigen::Vector3d(R1 - r1 + R2 - r2, 0, 0),
-           Eigen::Quaterniond(
-               Eigen::AngleAxisd(std::numbers::pi / 2 + turn, Eigen::Vector3d::UnitX()))));
+  BodyPose p2 =
+      BodyPose::FromCoordinates(Pose(Eigen::Vector3d(R1 - r1 + R2 - r2, 0, 0),
+                                     Eigen::Quaterniond(Eigen::AngleAxisd(
+                                         std::numbers::pi / 2 + turn, Eigen::Vector3d::UnitX()))));
   // The contact pair: the inner equators, found from the sampled seed nearest (R1 − r1, 0, 0).
   SurfaceSurfaceExtremum Contact(SurfacePairEval* at) const {
     // u = 0 is the +x meridian of each torus; the inner equator is half way round the tube.
     for (double v1 : {0.0, 0.25, 0.5, 0.75}) {
       for (double v2 : {0.0, 0.25, 0.5, 0.75}) {
-        const SurfaceSurfaceExtremum e = SolveSurfaceSurface(
-            t1, p1, t2, p2, Eigen::Vector4d(0.0, v1, 0.5, v2), {}, at);
+        const SurfaceSurfaceExtremum e =
+            SolveSurfaceSurface(t1, p1, t2, p2, Eigen::Vector4d(0.0, v1, 0.5, v2), {}, at);
         if (e.status == ExtremalStatus::kConverged && std::abs(e.beta) < 1e-12 &&
             (e.p_f - Eigen::Vector3d(R1 - r1, 0, 0)).norm() < 1e-9) {
           return e;
@@ -238,7 +239,8 @@ TEST(RelativeCurvatureTest, PredictsTheGapToSecondOrder) {
       // (u wraps: the contact sits on torus 1's seam, u = 0 ≡ 1.)
       const double u1 = std::fmod(e.u[0] + step[0] + 1.0, 1.0), v1 = e.u[1] + step[1];
       const Eigen::Vector3d x = L.p1.Point(L.t1.Evaluate(u1, v1, 0).S);
-      const PointSurfaceExtremum d = SolvePointSurface(x, L.t2, L.p2, e.u.tail<2>() + step.tail<2>());
+      const PointSurfaceExtremum d =
+          SolvePointSurface(x, L.t2, L.p2, e.u.tail<2>() + step.tail<2>());
       ASSERT_EQ(d.status, ExtremalStatus::kConverged);
       const double predicted = 0.5 * k.eigenvalues[i] * xi * xi;
       EXPECT_NEAR(d.distance, predicted, 1e-2 * std::abs(predicted)) << "eigenvector " << i;

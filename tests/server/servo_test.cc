@@ -16,6 +16,7 @@
 #include "server/global_link.h"
 #include "testing/alloc_counter.h"
 #include "testing/drag_path.h"
+#include "testing/idle_parts.h"
 
 namespace tangent::server {
 namespace {
@@ -253,6 +254,46 @@ TEST(ServoTest, BadOptionsAreRejected) {
   } catch (const SceneError& e) {
     EXPECT_NE(std::string(e.what()).find("dof must be 3 or 6, got 4"), std::string::npos);
   }
+}
+
+// Model only what a scene needs: the paperclips with seventeen more clips declared but in no
+// contact pair, joint, grasp or objective. The idle clips are held fixed (no coordinates), get no
+// offset mesh, and the drag computes exactly what the three-clip scene computes: the same
+// wrenches, bit for bit, through the same events. (What they cost in time, same run:
+// bench/servo_profile --idle-parts.)
+TEST(ServoTest, IdlePartsAreNotModelled) {
+  const auto three = Load("paperclips");
+  const auto twenty = ParseScene(tangent::testing::PaperclipsWithIdleClips(TANGENT_SCENES_DIR, 17),
+                                 "paperclips + 17 idle clips", TANGENT_SCENES_DIR);
+  ASSERT_EQ(twenty->mechanism.num_bodies(), 20);
+  ServoLoop a(*three, ServoOptions{}), b(*twenty, ServoOptions{});
+  EXPECT_EQ(b.problem().mechanism().num_coordinates(), a.problem().mechanism().num_coordinates());
+  EXPECT_EQ(b.problem().mechanism().num_coordinates(), 14);  // the two free clips
+  EXPECT_EQ(b.problem().equalities().size(), a.problem().equalities().size());
+  EXPECT_EQ(b.problem().inequalities().size(), a.problem().inequalities().size());
+  for (size_t k = 3; k < twenty->surfaces.size(); ++k) {
+    EXPECT_FALSE(twenty->surfaces[k].watched);
+    EXPECT_TRUE(twenty->surfaces[k].mesh.vertices.empty()) << k;
+  }
+  GlobalLink link_a(a), link_b(b);
+  Snapshot snap;
+  TickResult ra, rb;
+  int64_t now = 1'000'000'000, differences = 0, events = 0;
+  for (int k = 0; k < 1500; ++k) {
+    const DeviceSample s = bench::DragSample(k + 1, 4e-3 * k, now);
+    for (int tick = 0; tick < 4; ++tick) {
+      a.Tick(&s, now, &ra);
+      b.Tick(&s, now, &rb);
+      now += 250'000;
+      for (int i = 0; i < 3; ++i) differences += ra.wrench.force[i] != rb.wrench.force[i];
+    }
+    a.FillSnapshot(&snap);
+    link_a.Pass(snap, [&](const ContactEventMsg& m) { events += a.Apply(m); });
+    b.FillSnapshot(&snap);
+    link_b.Pass(snap, [&](const ContactEventMsg& m) { b.Apply(m); });
+  }
+  EXPECT_EQ(differences, 0);
+  EXPECT_GT(events, 0);  // the drag made and broke contacts on the way
 }
 
 }  // namespace
