@@ -171,7 +171,13 @@ NurbsSurface SurfaceFromJson(const json& j, const std::string& where) {
       for (size_t jj = 0; jj < row.size(); ++jj) w.push_back(Weight(row[jj], wl / i / jj));
     }
   }
-  return NurbsSurface(std::move(ku), std::move(kv), pts, w);
+  // The net's own checks (finite, weights and coordinates within range so evaluation cannot
+  // overflow) name the control point; they are this document's error.
+  try {
+    return NurbsSurface(std::move(ku), std::move(kv), pts, w);
+  } catch (const std::invalid_argument& e) {
+    cl.Fail(e.what());
+  }
 }
 
 template <int Dim>
@@ -213,7 +219,11 @@ NurbsCurve<Dim> CurveAt(const json& j, const Loc& loc) {
     }
     for (size_t i = 0; i < warr.size(); ++i) w.push_back(Weight(warr[i], wl / i));
   }
-  return NurbsCurve<Dim>(std::move(k), pts, w);
+  try {
+    return NurbsCurve<Dim>(std::move(k), pts, w);
+  } catch (const std::invalid_argument& e) {  // the net's range checks, as for surfaces
+    cl.Fail(e.what());
+  }
 }
 
 namespace {
@@ -233,7 +243,11 @@ NurbsCurve2d TrimCurve(const json& j, const Loc& loc) {
       pts.push_back(Point<2>(arr[i], pl / i, 1.0));
       if (i > 0 && pts[i] == pts[i - 1]) (pl / i).Fail("repeats the previous point");
     }
-    return MakePolyline2d(pts);
+    try {
+      return MakePolyline2d(pts);
+    } catch (const std::invalid_argument& e) {  // the net's range checks
+      pl.Fail(e.what());
+    }
   }
   if (t == "circle") {
     const Eigen::Vector2d c = Point<2>(Field(j, loc, "center"), loc / "center", 1.0);
@@ -244,7 +258,11 @@ NurbsCurve2d TrimCurve(const json& j, const Loc& loc) {
       if (!j["clockwise"].is_boolean()) (loc / "clockwise").Fail("expected true or false");
       clockwise = j["clockwise"].get<bool>();
     }
-    return MakeCircle2d(c, r, clockwise);
+    try {
+      return MakeCircle2d(c, r, clockwise);
+    } catch (const std::invalid_argument& e) {  // the net's range checks
+      loc.Fail(e.what());
+    }
   }
   (loc / "type").Fail("expected \"nurbs_curve\", \"polyline\" or \"circle\", found " + type.dump());
 }

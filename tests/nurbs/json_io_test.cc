@@ -108,6 +108,38 @@ TEST(JsonIoTest, ControlPointAndWeightErrorsNameTheEntry) {
   j = GoodSurface();
   j["weights"].erase(3);
   ExpectError(j, "/weights: expected 4 rows, found 3");
+  // Finite but beyond the range evaluation can take (fuzz/regressions/surface: an uncaught
+  // std::invalid_argument from the net's own check, before).
+  j = GoodSurface();
+  j["control_points"][3][0][0] = -7.3e118;
+  ExpectError(j, "/control_points: NURBS surface: control point [3][0]");
+  ExpectError(j, "is out of range");
+  j = GoodSurface();
+  j["weights"][1][1] = 1e120;
+  ExpectError(j, "/control_points: NURBS surface: control point [1][1]");
+}
+
+TEST(JsonIoTest, CurveAndTrimRangeErrorsAreParseErrors) {
+  const json curve = json::parse(R"({"type": "nurbs_curve", "dimension": 2, "degree": 1,
+      "knots": [0, 0, 1, 1], "control_points": [[0, 0], [1e150, 1]]})");
+  try {
+    CurveFromJson<2>(curve, "c.json");
+    ADD_FAILURE() << "accepted";
+  } catch (const ParseError& e) {
+    EXPECT_NE(std::string(e.what()).find("c.json: /control_points: NURBS curve"),
+              std::string::npos)
+        << e.what();
+  }
+  const NurbsSurface surface = SurfaceFromJson(GoodSurface(), "s.json");
+  const json trim = json::parse(
+      R"({"holes": [[{"type": "circle", "center": [0.5, 0.5], "radius": 1e200}]]})");
+  try {
+    TrimFromJson(trim, surface, "t.json");
+    ADD_FAILURE() << "accepted";
+  } catch (const ParseError& e) {
+    EXPECT_NE(std::string(e.what()).find("t.json: /holes/0/0: NURBS curve"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(JsonIoTest, StructureErrors) {
