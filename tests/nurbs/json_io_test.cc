@@ -126,13 +126,12 @@ TEST(JsonIoTest, CurveAndTrimRangeErrorsAreParseErrors) {
     CurveFromJson<2>(curve, "c.json");
     ADD_FAILURE() << "accepted";
   } catch (const ParseError& e) {
-    EXPECT_NE(std::string(e.what()).find("c.json: /control_points: NURBS curve"),
-              std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("c.json: /control_points: NURBS curve"), std::string::npos)
         << e.what();
   }
   const NurbsSurface surface = SurfaceFromJson(GoodSurface(), "s.json");
-  const json trim = json::parse(
-      R"({"holes": [[{"type": "circle", "center": [0.5, 0.5], "radius": 1e200}]]})");
+  const json trim =
+      json::parse(R"({"holes": [[{"type": "circle", "center": [0.5, 0.5], "radius": 1e200}]]})");
   try {
     TrimFromJson(trim, surface, "t.json");
     ADD_FAILURE() << "accepted";
