@@ -125,33 +125,35 @@ void BM_OursTrack(benchmark::State& state) {
   state.counters["not_tracked"] = failures;
 }
 
+// The pair evaluated at its extremum 4 mm apart (what u_q and the relative curvature take).
+struct AtExtremum {
+  BodyPose pf, pg;
+  SurfacePairEval e;
+  AtExtremum() {
+    const Scene& s = GetScene();
+    const Vector7d qf = s.QF(0.004);
+    pf = BodyPose::FromCoordinates(qf);
+    pg = BodyPose::FromCoordinates(s.q_g);
+    nurbs::SpanHint hf, hg;
+    EvaluatePair(s.f, pf, s.g, pg, Reference(qf).u, &hf, &hg, &e);
+  }
+};
+
 template <bool kClosed>
 void BM_Uq(benchmark::State& state) {
-  const Scene& s = GetScene();
-  const Vector7d qf = s.QF(0.004);
-  const SurfaceSurfaceExtremum ref = Reference(qf);
-  const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(s.q_g);
-  nurbs::SpanHint hf, hg;
-  SurfacePairEval e;
-  EvaluatePair(s.f, pf, s.g, pg, ref.u, &hf, &hg, &e);
+  const AtExtremum x;
   Matrix4x14 uq;
   for (auto _ : state) {
-    const bool ok = kClosed ? ContactJacobianClosedForm(e, pf, pg, &uq)
-                            : ContactJacobianImplicit(e, pf, pg, &uq);
+    const bool ok = kClosed ? ContactJacobianClosedForm(x.e, x.pf, x.pg, &uq)
+                            : ContactJacobianImplicit(x.e, x.pf, x.pg, &uq);
     benchmark::DoNotOptimize(ok);
     benchmark::DoNotOptimize(uq);
   }
 }
 
 void BM_RelativeCurvature(benchmark::State& state) {
-  const Scene& s = GetScene();
-  const Vector7d qf = s.QF(0.004);
-  const SurfaceSurfaceExtremum ref = Reference(qf);
-  const BodyPose pf = BodyPose::FromCoordinates(qf), pg = BodyPose::FromCoordinates(s.q_g);
-  nurbs::SpanHint hf, hg;
-  SurfacePairEval e;
-  EvaluatePair(s.f, pf, s.g, pg, ref.u, &hf, &hg, &e);
-  for (auto _ : state) benchmark::DoNotOptimize(RelativeCurvatureOf(e));
+  const AtExtremum x;
+  for (auto _ : state) benchmark::DoNotOptimize(RelativeCurvatureOf(x.e));
 }
 
 void ConvergenceReport() {

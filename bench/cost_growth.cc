@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/sample_stats.h"
 #include "server/global_link.h"
 #include "server/servo.h"
 #include "testing/drag_path.h"
@@ -31,20 +32,12 @@ using namespace tangent::server;
 
 namespace {
 
+using tangent::bench::Mean;
+using tangent::bench::Quantile;
+
 // Heap in use (glibc's count of allocated bytes): what a scene and its servo hold, unlike the
 // resident size, which keeps what earlier chains freed.
 double HeapMb() { return static_cast<double>(mallinfo2().uordblks) / 1048576.0; }
-
-double Quantile(std::vector<double> v, double p) {
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size())))];
-}
-
-double Mean(const std::vector<double>& v) {
-  double s = 0.0;
-  for (double x : v) s += x;
-  return s / static_cast<double>(v.size());
-}
 
 // Least-squares slope and intercept of y on x.
 std::pair<double, double> Fit(const std::vector<double>& x, const std::vector<double>& y) {

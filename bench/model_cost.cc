@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/sample_stats.h"
 #include "server/global_link.h"
 #include "server/servo.h"
 #include "testing/drag_path.h"
@@ -23,6 +24,9 @@
 using namespace tangent::server;
 
 namespace {
+
+using tangent::bench::Mean;
+using tangent::bench::Quantile;
 
 struct Run {
   std::unique_ptr<Scene> scene;
@@ -52,16 +56,6 @@ struct Run {
         std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
   }
 };
-
-double Quantile(std::vector<double> v, double p) {
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size())))];
-}
-double Mean(const std::vector<double>& v) {
-  double s = 0.0;
-  for (double x : v) s += x;
-  return s / static_cast<double>(v.size());
-}
 
 }  // namespace
 
