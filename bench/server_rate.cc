@@ -6,7 +6,11 @@
 // constraint violation, global passes, and the machine's own wake-up jitter measured in the same
 // run (the feeding thread's lateness after each 1 ms clock_nanosleep, timer slack 1 ns).
 //
-//   ./build/bench/server_rate [--seconds 60] [--rate 4000]
+// With --scene NAME, scenes/NAME.json instead, its hand following scenes/NAME.path.csv when
+// there is one (the peg-in-hole scene: over the plate, across the rim, into the hole, round
+// its wall), looped.
+//
+//   ./build/bench/server_rate [--seconds 60] [--rate 4000] [--scene paperclips]
 
 #include <sys/prctl.h>
 
@@ -18,7 +22,13 @@
 #include <string>
 #include <vector>
 
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
 #include "server/engine.h"
+#include "server/phantom.h"
 #include "server/scene.h"
 #include "testing/drag_path.h"
 
@@ -27,21 +37,34 @@ using namespace tangent::server;
 int main(int argc, char** argv) {
   double seconds = 60.0, rate = 4000.0;
   bool spin_for_device = true;
+  std::string scene_name = "paperclips";
   const bool verbose = std::getenv("TANGENT_VERBOSE") != nullptr;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--rate")) rate = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--spin-for-device")) spin_for_device = std::atoi(argv[i + 1]) != 0;
+    if (!std::strcmp(argv[i], "--scene")) scene_name = argv[i + 1];
   }
-  auto scene = LoadScene(std::string(TANGENT_SCENES_DIR) + "/paperclips.json");
+  const std::string base = std::string(TANGENT_SCENES_DIR) + "/" + scene_name;
+  auto scene = LoadScene(base + ".json");
+  std::unique_ptr<HandTrajectory> path;
+  if (std::filesystem::exists(base + ".path.csv")) {
+    std::ifstream f(base + ".path.csv");
+    std::stringstream text;
+    text << f.rdbuf();
+    path =
+        std::make_unique<HandTrajectory>(HandTrajectory::FromCsv(text.str(), base + ".path.csv"));
+    path->LoopFrom(0.0);
+  }
   EngineOptions eo;
   eo.rate_hz = rate;
   eo.spin_for_device = spin_for_device;
   Engine engine(*scene, eo);
   std::printf(
-      "server_rate: paperclips, %d contacts at rest, servo %.0f Hz on core %d, global stage "
+      "server_rate: %s, %d contacts at rest, servo %.0f Hz on core %d, global stage "
       "on core %d, %.0f s\n",
-      engine.servo().active_contacts(), rate, eo.servo_cpu, eo.global_cpu, seconds);
+      scene_name.c_str(), engine.servo().active_contacts(), rate, eo.servo_cpu, eo.global_cpu,
+      seconds);
   prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);
   engine.Start();
   // This thread stands for the LCM bridge: off the servo's core, as tangentd keeps it.
@@ -62,7 +85,12 @@ int main(int argc, char** argv) {
     jitter.push_back(1e-3 * static_cast<double>(now - next));
     const double t = 1e-9 * static_cast<double>(now - start);
     if (t > seconds) break;
-    engine.Publish(tangent::bench::DragSample(++seq, t, now));
+    DeviceSample sample = tangent::bench::DragSample(++seq, t, now);
+    if (path) {
+      const Eigen::Vector3d p = path->At(t);
+      for (int i = 0; i < 3; ++i) sample.position[i] = p[i];
+    }
+    engine.Publish(sample);
     while (engine.wrenches().Pop(&w)) {
       max_force = std::max(max_force, std::sqrt(w.force[0] * w.force[0] + w.force[1] * w.force[1] +
                                                 w.force[2] * w.force[2]));
@@ -120,7 +148,7 @@ int main(int argc, char** argv) {
       DurationHistogram::Quantile(g.data(), 0.5), engine.global_histogram().max(),
       static_cast<long long>(c.events_applied), static_cast<long long>(c.events_dropped),
       max_contacts);
-  std::printf("constraint violation during the drag: max %.1e (target 1e-6); max force %.2f N\n",
+  std::printf("constraint violation during the run: max %.1e (target 1e-6); max force %.2f N\n",
               max_violation, max_force);
   std::printf(
       "targets: p99 <= 50 us %s, p99.9 <= 100 us %s, late < 0.5 %% at 4 kHz %s, "

@@ -12,6 +12,7 @@
 
 #include "contact/box_newton.h"
 #include "contact/relative_curvature.h"
+#include "contact/trimmed.h"
 
 namespace tangent::contact {
 
@@ -59,6 +60,7 @@ WorldBox Place(const BodyPose& p, const Eigen::Vector3d& c, const Eigen::Vector3
 
 struct Watched {
   GlobalSurface s;
+  std::unique_ptr<TrimEdges> edges;  // when trimmed
   std::vector<Chunk> chunks;
   // The whole offset mesh's box (surface frame) as an FCL box: the object the broad-phase
   // manager sees.
@@ -248,7 +250,7 @@ std::vector<Chunk> BuildChunks(const nurbs::OffsetMesh& mesh, const GlobalOption
   const int bu = std::max(1, options.chunk_u_cells);
   std::map<std::pair<int, int>, std::vector<int>> blocks;
   for (int t = 0; t < nt; ++t) {
-    const int cell = t / 2;
+    const int cell = mesh.base.CellOf(t);
     blocks[{(cell / nvc) / bu, (cell % nvc) / bv}].push_back(t);
   }
   std::vector<Chunk> chunks;
@@ -297,6 +299,7 @@ std::vector<Chunk> BuildChunks(const nurbs::OffsetMesh& mesh, const GlobalOption
 Watched WatchSurface(int index, const GlobalSurface& s, const GlobalOptions& options) {
   Watched w;
   w.s = s;
+  if (s.trim) w.edges = std::make_unique<TrimEdges>(s.surface, s.trim);
   w.chunks = BuildChunks(*s.mesh, options);
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
   for (const Eigen::Vector3d& x : s.mesh->vertices) {
@@ -582,6 +585,30 @@ bool SamePoints(const GlobalContact& x, const GlobalContact& y) {
          (x.p_b - y.p_b).norm() < kSamePoint;
 }
 
+// What a face extremum e of surfaces a, b stands for when either is trimmed: itself while its
+// points lie on both materials, else the edge contact of the first surface it leaves
+// (contact/trimmed.h), with that edge's distance and points in (a, b) order.
+struct OnMaterial {
+  bool on_edge = false;
+  double beta = 0.0;
+  Eigen::Vector3d p_a = Eigen::Vector3d::Zero(), p_b = Eigen::Vector3d::Zero();
+  ExtremalStatus status = ExtremalStatus::kNotConverged;
+};
+OnMaterial MeasureOnMaterial(const Watched& wa, const BodyPose& pa, const Watched& wb,
+                             const BodyPose& pb, const SurfaceSurfaceExtremum& e) {
+  OnMaterial m{false, e.beta, e.p_f, e.p_g, e.status};
+  if (wa.edges && !wa.s.trim->Contains(e.u.head<2>())) {
+    const TrimmedMeasure t = MeasureTrimmed(*wa.edges, pa, *wb.s.surface, pb, e);
+    m = {true, t.beta, t.p_f, t.p_g, t.status};
+  } else if (wb.edges && !wb.s.trim->Contains(e.u.tail<2>())) {
+    SurfaceSurfaceExtremum swapped = e;
+    swapped.u << e.u.tail<2>(), e.u.head<2>();
+    const TrimmedMeasure t = MeasureTrimmed(*wb.edges, pb, *wa.s.surface, pa, swapped);
+    m = {true, t.beta, t.p_g, t.p_f, t.status};
+  }
+  return m;
+}
+
 // The minima beside a saddle of the distance (relative_curvature.h): the surfaces cross along
 // the eigenvector w of M's negative eigenvalue, so a minimum (the deepest point of the crossing,
 // or the nearest of a near miss) lies on each side of the saddle along w. Newton from a seed
@@ -652,22 +679,32 @@ void RefineClusters(const GlobalContactStage::Impl& m, const GlobalOptions& opti
     SurfacePairEval at;
     bool ok = false;
     const Seed& cl = m.accepted[k];
+    OnMaterial on;
     for (int attempt = 0; attempt < 2 + cl.n_members && !ok; ++attempt) {
       ++st->seeds_refined;
       const Eigen::Vector4d seed = attempt == 0   ? ClusterMean(cl, domains)
                                    : attempt == 1 ? cl.u
                                                   : cl.members[static_cast<size_t>(attempt - 2)];
       e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, seed, {}, &at);
-      ok = e.status == ExtremalStatus::kConverged && e.beta < options.activation &&
-           e.beta > -options.max_penetration && e.alignment < 0.0;
+      // On trimmed surfaces the face's extremal point may lie off the material (over a hole,
+      // beyond a face's border): the contact is then the nearest trim edge's.
+      on = MeasureOnMaterial(wa, pa, wb, pb, e);
+      if (on.on_edge) {
+        ok = (e.status == ExtremalStatus::kConverged || e.status == ExtremalStatus::kAtBoundary) &&
+             on.status == ExtremalStatus::kConverged && on.beta < options.activation &&
+             on.beta > -options.max_penetration;
+      } else {
+        ok = e.status == ExtremalStatus::kConverged && e.beta < options.activation &&
+             e.beta > -options.max_penetration && e.alignment < 0.0;
+      }
     }
     if (!ok) continue;
     // A saddle of the distance is not a contact: the minima beside it are.
-    if (const RelativeCurvature rc = RelativeCurvatureOf(at); rc.crossing) {
+    if (const RelativeCurvature rc = RelativeCurvatureOf(at); !on.on_edge && rc.crossing) {
       MinimaBeside(*wa.s.surface, pa, *wb.s.surface, pb, e, at, rc, options, a, b, found);
       continue;
     }
-    const GlobalContact c{a, b, e.u, e.beta, e.p_f, e.p_g};
+    const GlobalContact c{a, b, e.u, on.beta, on.p_a, on.p_b};
     if (std::none_of(found->begin(), found->end(),
                      [&](const GlobalContact& f) { return SamePoints(f, c); })) {
       found->push_back(c);
@@ -727,6 +764,14 @@ void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
       e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, c.u, {}, &at);
       jumped = FoundAnotherExtremum(*wa.s.surface, *wb.s.surface, c.u, e, held_distance);
     }
+    // On trimmed surfaces: the edge contact where the face's point lies off the material.
+    const OnMaterial on = MeasureOnMaterial(wa, pa, wb, pb, e);
+    if (on.on_edge && !jumped && e.status != ExtremalStatus::kNotConverged) {
+      e.status = on.status;
+      e.beta = on.beta;
+      e.p_f = on.p_a;
+      e.p_g = on.p_b;
+    }
     // A removal names the contact by the parameters it is tracked at (what the owner of the
     // contact matches it by), with the distance and points re-solved now.
     GlobalContact now{c.a, c.b, c.u, e.beta, e.p_f, e.p_g};
@@ -749,7 +794,7 @@ void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
     } else if (same_as_earlier(k, e)) {
       // Two tracked contacts on one point (the minima of a split came back together).
       remove(ContactEvent::Reason::kMerged);
-    } else if (const RelativeCurvature rc = RelativeCurvatureOf(at); rc.crossing) {
+    } else if (const RelativeCurvature rc = RelativeCurvatureOf(at); !on.on_edge && rc.crossing) {
       // The pair the contact follows turned from a minimum into a saddle (a pitchfork: e.g.
       // two interlocked wires turned until one lies in the other's bend, tighter than itself);
       // β ≥ 0 there no longer keeps the surfaces apart. The minima either side replace it.

@@ -9,6 +9,7 @@
 #include "contact/extremal.h"
 #include "contact/placed.h"
 #include "nurbs/offset.h"
+#include "nurbs/trim.h"
 
 namespace tangent::contact {
 
@@ -18,6 +19,12 @@ struct GlobalSurface {
   int body = 0;
   const nurbs::NurbsSurface* surface = nullptr;
   const nurbs::OffsetMesh* mesh = nullptr;
+  /// The surface's material when it is trimmed (may be null): contacts are found and kept on
+  /// the material only, as face contacts there and as edge contacts (the trim edge against the
+  /// other surface, contact/trimmed.h) where the face's extremal point lies off it. A contact's
+  /// `u` stays the face pair's parameters (what a tracked contact is reseeded from); its β and
+  /// points are the measured ones.
+  const nurbs::TrimmedDomain* trim = nullptr;
 };
 
 struct GlobalOptions {

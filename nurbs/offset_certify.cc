@@ -7,6 +7,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
+#include <algorithm>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -77,9 +78,25 @@ OffsetCertificate CertifyOffsetMesh(const NurbsSurface& surface, const OffsetMes
   double min_radius = std::numeric_limits<double>::infinity();
   double min_concave = std::numeric_limits<double>::infinity();
   double worst = 0.0;
+  // A mesh cut along a trim (CutAlongTrim) covers only its kept cells: sample those.
+  const std::vector<double>& ul = m.base.u_lines;
+  const std::vector<double>& vl = m.base.v_lines;
+  const size_t nv = vl.size() > 1 ? vl.size() - 1 : 1;
+  std::vector<char> kept;
+  if (!m.base.cells.empty()) {
+    kept.assign(nv * (ul.size() > 1 ? ul.size() - 1 : 1), 0);
+    for (int cell : m.base.cells) kept[static_cast<size_t>(cell)] = 1;
+  }
+  auto in_kept_cell = [&](double u, double v) {
+    if (kept.empty()) return true;
+    const auto cu = std::upper_bound(ul.begin() + 1, ul.end() - 1, u) - ul.begin() - 1;
+    const auto cv = std::upper_bound(vl.begin() + 1, vl.end() - 1, v) - vl.begin() - 1;
+    return kept[static_cast<size_t>(cu) * nv + static_cast<size_t>(cv)] != 0;
+  };
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) {
       const double u = u0 + (u1 - u0) * (i + 0.5) / n, v = v0 + (v1 - v0) * (j + 0.5) / n;
+      if (!in_kept_cell(u, v)) continue;
       const SurfacePoint p = surface.Evaluate(u, v, 2);
       const Eigen::Vector3d N = p.S_u.cross(p.S_v);
       if (!(N.norm() > 0.0)) continue;

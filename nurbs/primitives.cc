@@ -290,4 +290,21 @@ NurbsSurface Transformed(const NurbsSurface& surface, const Eigen::Isometry3d& X
   return NurbsSurface::FromHomogeneous(surface.knots_u(), surface.knots_v(), std::move(cpw));
 }
 
+NurbsSurface ReversedU(const NurbsSurface& surface) {
+  // S'(u, v) = S(a + b − u, v): knots mirrored about the domain's middle, rows in reverse.
+  const KnotVector& k = surface.knots_u();
+  const double ab = k.domain_begin() + k.domain_end();
+  std::vector<double> knots(k.knots().rbegin(), k.knots().rend());
+  for (double& t : knots) t = ab - t;
+  const int nu = surface.num_u(), nv = surface.num_v();
+  std::vector<Eigen::Vector4d> cpw(surface.weighted_points().size());
+  for (int i = 0; i < nu; ++i) {
+    for (int j = 0; j < nv; ++j) {
+      cpw[static_cast<size_t>(i * nv + j)] = surface.weighted_point(nu - 1 - i, j);
+    }
+  }
+  return NurbsSurface::FromHomogeneous(KnotVector(k.degree(), std::move(knots)), surface.knots_v(),
+                                       std::move(cpw));
+}
+
 }  // namespace tangent::nurbs

@@ -79,4 +79,9 @@ NurbsCurve2d MakePolyline2d(const std::vector<Eigen::Vector2d>& points);
 /// their control points, so this is exact (the weights stay). For placing primitives on bodies.
 NurbsSurface Transformed(const NurbsSurface& surface, const Eigen::Isometry3d& X);
 
+/// The same surface with u running the other way, S'(u, v) = S(a + b − u, v) on the same
+/// domain [a, b]: its normal S'_u × S'_v points to the other side (a hole's wall as a cylinder
+/// facing its axis).
+NurbsSurface ReversedU(const NurbsSurface& surface);
+
 }  // namespace tangent::nurbs

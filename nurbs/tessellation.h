@@ -15,6 +15,10 @@ struct TriangleMesh {
   std::vector<Eigen::Vector2d> uv;            ///< (u, v) of each vertex
   std::vector<std::array<int, 3>> triangles;  ///< vertex indices, counter-clockwise in (u, v)
   std::vector<double> u_lines, v_lines;       ///< the parameter grid the mesh is built on
+  /// The grid cell of each triangle (cell i·(v_lines − 1) + j spans u_lines[i..i+1] and
+  /// v_lines[j..j+1]); empty for a full grid, where triangle t lies in cell t / 2.
+  std::vector<int> cells;
+  int CellOf(int t) const { return cells.empty() ? t / 2 : cells[static_cast<size_t>(t)]; }
   /// Certified bound: every surface point S(u, v) is within this distance of the mesh; more
   /// precisely, of one of the two triangles of the grid cell that contains (u, v).
   double error_bound = 0.0;

@@ -473,4 +473,40 @@ TrimmedDomain::Closest TrimmedDomain::Nearest(const Eigen::Vector2d& uv) const {
   return best;
 }
 
+bool TrimmedDomain::MayHoldMaterial(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) const {
+  // Each chord's piece of curve lies within its band of the chord, so within the chord's box
+  // grown by the band: a rectangle no such box meets is crossed by no loop, and lies wholly on
+  // the side of its centre.
+  for (const Chord& c : chords_) {
+    const Eigen::Vector2d c_lo = c.a.cwiseMin(c.b).array() - c.band;
+    const Eigen::Vector2d c_hi = c.a.cwiseMax(c.b).array() + c.band;
+    if ((c_lo.array() <= hi.array()).all() && (lo.array() <= c_hi.array()).all()) return true;
+  }
+  return Contains(0.5 * (lo + hi));
+}
+
+TriangleMesh CutAlongTrim(const TriangleMesh& mesh, const TrimmedDomain& trim) {
+  TriangleMesh out = mesh;
+  out.triangles.clear();
+  out.cells.clear();
+  const int nv = std::max(1, static_cast<int>(mesh.v_lines.size()) - 1);
+  std::vector<signed char> keep(
+      static_cast<size_t>(nv) * std::max<size_t>(1, mesh.u_lines.size() - 1), -1);
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const int cell = mesh.CellOf(static_cast<int>(t));
+    signed char& k = keep[static_cast<size_t>(cell)];
+    if (k < 0) {
+      const size_t i = static_cast<size_t>(cell / nv), j = static_cast<size_t>(cell % nv);
+      k = trim.MayHoldMaterial({mesh.u_lines[i], mesh.v_lines[j]},
+                               {mesh.u_lines[i + 1], mesh.v_lines[j + 1]})
+              ? 1
+              : 0;
+    }
+    if (!k) continue;
+    out.triangles.push_back(mesh.triangles[t]);
+    out.cells.push_back(cell);
+  }
+  return out;
+}
+
 }  // namespace tangent::nurbs

@@ -25,6 +25,7 @@
 #include <Eigen/Core>
 
 #include "nurbs/curve.h"
+#include "nurbs/tessellation.h"
 
 namespace tangent::nurbs {
 
@@ -81,6 +82,10 @@ class TrimmedDomain {
   bool Contains(const Eigen::Vector2d& uv) const;
   /// The closest point of the loops to (u, v) and the signed distance to it.
   Closest Nearest(const Eigen::Vector2d& uv) const;
+  /// Whether the parameter rectangle [lo, hi] may hold material: false only when it certainly
+  /// holds none (no chord's band reaches it, so no loop crosses it, and its centre is off the
+  /// material). Cells this rejects can be cut from meshes without losing any material.
+  bool MayHoldMaterial(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) const;
 
   bool has_outer() const { return has_outer_; }
   /// Loops in order: the outer loop first when there is one, then the holes.
@@ -108,5 +113,11 @@ class TrimmedDomain {
   std::vector<Chord> chords_;
   std::vector<std::vector<int>> loop_chords_;  ///< per loop, its chords in order
 };
+
+/// A tessellation cut along a trim: the grid cells that certainly hold no material
+/// (TrimmedDomain::MayHoldMaterial) dropped, cells the trim crosses kept whole, so every point of
+/// the material is still within the mesh's certified bound of one of its triangles. The vertices
+/// stay (indices unchanged); `cells` holds the kept triangles' grid cells.
+TriangleMesh CutAlongTrim(const TriangleMesh& mesh, const TrimmedDomain& trim);
 
 }  // namespace tangent::nurbs

@@ -9,6 +9,37 @@
 
 namespace tangent::optimizer {
 
+/// What the server needs of a contact slot's per-solve data, whichever term measures the
+/// contact (SurfaceContactTerm, TrimmedContactTerm): whether the slot is in use, the contact as
+/// it stands, and a way to restart it.
+///
+/// Contact slots are the server's way of adding and dropping contacts without changing the
+/// problem's structure: an inactive term evaluates nothing and reports β = kInactiveDistance
+/// with zero derivatives, which as an inequality (β ≥ 0) is inactive and gets multiplier 0. Not
+/// for equalities.
+struct ContactSlotState : TermState {
+  static constexpr double kInactiveDistance = 1.0;  // m
+  bool active = true;
+  int64_t tracked_steps = 0;  ///< evaluations answered by the tracker
+  int64_t solves = 0;         ///< evaluations that needed a full solve
+  int64_t lost = 0;           ///< tracker steps that reported `lost` (then solved)
+  /// Solves that found another extremum (contact::FoundAnotherExtremum): the pair is then held
+  /// at its last parameters (β = d·n there, continuous in the poses) until the global stage
+  /// re-finds the contact.
+  int64_t jumps = 0;
+  /// The contact at the last evaluated poses: the face pair's parameters (u, v, s, t) (what
+  /// Reseed takes), the distance β it is held to and the two points it is measured between.
+  virtual const contact::SurfaceSurfaceExtremum& extremum() const = 0;
+  /// Restarts tracking from new parameters (after a global contact search).
+  virtual void Reseed(const Eigen::Vector4d& u_new) = 0;
+  /// A global-stage contact event: the slot takes the contact at parameters u.
+  void Activate(const Eigen::Vector4d& u_new) {
+    active = true;
+    Reseed(u_new);
+  }
+  void Deactivate() { active = false; }
+};
+
 /// The signed distance β between a surface f on body a and a surface g on body b at their
 /// extremal pair (seed 001 §3.3, design.md §4.1–4.2), one row: as an equality it is the
 /// "floating contact" β = 0 (the surfaces touch and may roll and slide), as an inequality
@@ -29,9 +60,8 @@ namespace tangent::optimizer {
 /// per-solve data (State, in the solver's ProblemData); the term itself is immutable.
 class SurfaceContactTerm final : public Term {
  public:
-  struct State final : TermState {
+  struct State final : ContactSlotState {
     State(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g) : tracker(f, g) {}
-    bool active = true;
     Eigen::Vector4d u;  ///< tracked (u, v, s, t)
     /// contact/'s tracker follows the pair between solves (predict with u_q, one correction);
     /// a full extremal solve from the last parameters runs when it is not tracking (start,
@@ -40,35 +70,16 @@ class SurfaceContactTerm final : public Term {
     contact::ContactTracker tracker;
     bool tracking = false;
     contact::TrackStatus track_status = contact::TrackStatus::kLost;  ///< the last step's
-    int64_t tracked_steps = 0;  ///< evaluations answered by the tracker
-    int64_t solves = 0;         ///< evaluations that needed a full solve
-    int64_t lost = 0;           ///< tracker steps that reported `lost` (then solved)
-    /// Solves that found another extremum (contact::FoundAnotherExtremum): the pair is then held
-    /// at its last parameters (β = d·n there, continuous in the poses) until the global stage
-    /// re-finds the contact.
-    int64_t jumps = 0;
     Vector7d q_f, q_g;  ///< poses of the last evaluation
     bool valid = false;
     contact::SurfaceSurfaceExtremum ext;
     contact::SurfacePairEval eval;
-    /// The extremum at the last evaluated poses (parameters, β, points, status).
-    const contact::SurfaceSurfaceExtremum& extremum() const { return ext; }
-    /// Restarts tracking from new parameters (after a global contact search).
-    void Reseed(const Eigen::Vector4d& u_new) {
+    const contact::SurfaceSurfaceExtremum& extremum() const override { return ext; }
+    void Reseed(const Eigen::Vector4d& u_new) override {
       u = u_new;
       valid = false;
       tracking = false;
     }
-    /// Contact slots (the server's way of adding and dropping contacts without changing the
-    /// problem's structure): an inactive term evaluates nothing and reports β =
-    /// kInactiveDistance with zero derivatives, which as an inequality (β ≥ 0) is inactive and
-    /// gets multiplier 0. Not for equalities. Activate restarts tracking from u (a global-stage
-    /// contact event).
-    void Activate(const Eigen::Vector4d& u_new) {
-      active = true;
-      Reseed(u_new);
-    }
-    void Deactivate() { active = false; }
   };
 
   /// The surfaces must outlive the term. `seed`: (u, v, s, t) near the extremum to follow.
@@ -88,12 +99,12 @@ class SurfaceContactTerm final : public Term {
                           TermHessian* h) const override;
 
   std::unique_ptr<TermState> MakeState() const override;
-  static constexpr double kInactiveDistance = 1.0;  // m
   /// The tracker's corrected point is taken when the contact equations' scaled residual there
   /// is below this (contact::ExtremumAt): one Newton step from it would move it by ~1e-24.
   static constexpr double kTrackedResidual = 1e-12;
 
  private:
+  friend class TrimmedContactTerm;  // measures its face contact through this term
   void Update(const std::vector<BodyPose>& poses, State* st) const;
   /// ∇²β at an edge or corner extremum (contacts.cc), weighted by w, into *h.
   void AddBoundaryHessian(const State& st, const BodyPose& pf, const BodyPose& pg, double w,

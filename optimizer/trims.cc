@@ -137,29 +137,11 @@ void TrimConstraintTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
 TrimmedContactTerm::TrimmedContactTerm(int body_a, const nurbs::NurbsSurface* f,
                                        const nurbs::TrimmedDomain* trim, int body_b,
                                        const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed)
-    : body_a_(body_a), body_b_(body_b), f_(f), trim_(trim), g_(g), seed_(seed) {
-  for (const nurbs::TrimLoop& loop : trim_->loops()) {
-    pieces_.emplace_back();
-    for (size_t ci = 0; ci < loop.curves.size(); ++ci) {
-      const nurbs::NurbsCurve2d& c = loop.curves[ci];
-      nurbs::NurbsCurve2d rest = c;
-      for (double knot : c.knots().Breakpoints()) {
-        const nurbs::KnotVector& k = rest.knots();
-        if (c.knots().Multiplicity(knot) < c.degree()) continue;  // C¹ or smoother there
-        if (!(knot > k.domain_begin() && knot < k.domain_end())) continue;
-        auto [left, right] = nurbs::Split(rest, knot);
-        pieces_.back().push_back({static_cast<int>(ci), std::move(left)});
-        rest = std::move(right);
-      }
-      pieces_.back().push_back({static_cast<int>(ci), std::move(rest)});
-    }
-  }
-}
+    : body_a_(body_a), body_b_(body_b), g_(g), face_(body_a, f, body_b, g, seed), edges_(f, trim) {}
 
 std::unique_ptr<TermState> TrimmedContactTerm::MakeState() const {
   auto st = std::make_unique<State>();
-  st->pair = seed_;
-  st->edge << seed_[2], seed_[3], 0.0;
+  st->face_state = face_.MakeState();
   return st;
 }
 
@@ -167,57 +149,44 @@ void TrimmedContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   const BodyPose& pa = PoseOf(poses, body_a_);
   const BodyPose& pb = PoseOf(poses, body_b_);
   if (st->valid && SamePose(pa.q, st->q_a) && SamePose(pb.q, st->q_b)) return;
-  st->pair_ext = contact::SolveSurfaceSurface(*f_, pa, *g_, pb, st->pair, {}, &st->pair_eval);
-  st->pair = st->pair_ext.u;
-  const Eigen::Vector2d u_e = st->pair.head<2>();
+  SurfaceContactTerm::State& face = st->face();
+  face.active = true;
+  face_.Update(poses, &face);
+  const contact::SurfaceSurfaceExtremum& e = face.ext;
+  const Eigen::Vector2d u_e = e.u.head<2>();
   const bool was_on_edge = st->on_edge;
-  st->on_edge = !trim_->Contains(u_e);
+  st->on_edge = !edges_.trim().Contains(u_e);
+  st->reported = e;
   if (st->on_edge) {
     // The edge nearest the face's extremal point; tracked from the last edge extremum while it
-    // stays on the same curve, else seeded at the nearest point of the new one.
-    const nurbs::TrimmedDomain::Closest near = trim_->Nearest(u_e);
-    const std::vector<Piece>& loop = pieces_[static_cast<size_t>(near.loop)];
-    const int n = static_cast<int>(loop.size());
-    int piece = 0;
-    for (int p = 0; p < n; ++p) {
-      const Piece& x = loop[static_cast<size_t>(p)];
-      if (x.curve == near.curve && near.t >= x.c.knots().domain_begin() &&
-          near.t <= x.c.knots().domain_end()) {
-        piece = p;
-        break;
-      }
+    // stays on the same loop, else started at the nearest point of the new one.
+    const nurbs::TrimmedDomain::Closest near = edges_.trim().Nearest(u_e);
+    if (!was_on_edge || !st->valid || near.loop != st->edge.loop) {
+      edges_.StartNear(near, *g_, pb, pa, e.u.tail<2>(), &st->edge);
     }
-    if (!was_on_edge || near.loop != st->loop) {
-      st->loop = near.loop;
-      st->piece = piece;
-      st->edge << st->pair[2], st->pair[3], near.t;
-    }
-    // Solve on the tracked piece; walk to a neighbour while the extremum stops at a piece's end
-    // that the neighbour continues (at most once round the loop).
-    int from = -1;
-    for (int walk = 0; walk <= n; ++walk) {
-      const Piece& x = loop[static_cast<size_t>(st->piece)];
-      const contact::BodyCurve edge(f_, &x.c);
-      st->edge_ext = contact::SolveCurveSurface(*g_, pb, edge, pa, st->edge);
-      st->edge = st->edge_ext.u;
-      if (!st->edge_ext.at_bound[2]) break;
-      const bool at_end =
-          st->edge[2] >= 0.5 * (x.c.knots().domain_begin() + x.c.knots().domain_end());
-      const int next = (st->piece + (at_end ? 1 : n - 1)) % n;
-      if (next == from) break;  // back where it came from: a corner between the two
-      from = st->piece;
-      st->piece = next;
-      const nurbs::KnotVector& k = loop[static_cast<size_t>(next)].c.knots();
-      st->edge[2] = at_end ? k.domain_begin() : k.domain_end();
-    }
-    st->curve = loop[static_cast<size_t>(st->piece)].curve;
-    const contact::BodyCurve edge(f_, &loop[static_cast<size_t>(st->piece)].c);
+    edges_.Solve(*g_, pb, pa, &st->edge);
     nurbs::SpanHint hint_g, hint_f;
     int span = 0;
-    contact::EvaluateCurveSurface(*g_, pb, edge, pa, st->edge, &hint_g, &span, &hint_f,
-                                  &st->edge_eval);
+    contact::EvaluateCurveSurface(*g_, pb, edges_.Curve(st->edge), pa, st->edge.u, &hint_g, &span,
+                                  &hint_f, &st->edge_eval);
+    // β = (E − G)·n along g's normal at an interior extremum of g, along the line between the
+    // points where the extremum is held on a bound (g's border, the curve's end).
+    const contact::CurveSurfaceExtremum& x = st->edge.ext;
+    const bool bound = x.at_bound[0] || x.at_bound[1] || x.at_bound[2];
+    const Eigen::Vector3d d = x.p_g - x.p_f;  // E − G (the solver's curve is our edge)
+    st->reported.beta = x.beta;
+    st->reported.p_f = x.p_g;
+    st->reported.p_g = x.p_f;
+    st->reported.status = x.status;
+    st->reported.direction = bound && d.norm() > 0.0
+                                 ? Eigen::Vector3d((x.beta < 0.0 ? -1.0 : 1.0) * d.normalized())
+                                 : Eigen::Vector3d(x.R_WCf.col(2));
   }
   st->switches += st->valid && was_on_edge != st->on_edge;
+  st->tracked_steps = face.tracked_steps;
+  st->solves = face.solves;
+  st->lost = face.lost;
+  st->jumps = face.jumps;
   st->q_a = pa.q;
   st->q_b = pb.q;
   st->valid = true;
@@ -227,27 +196,32 @@ void TrimmedContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
                                   Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                                   Eigen::Ref<Eigen::MatrixXd> J_b) const {
   auto* st = static_cast<State*>(state);
-  Update(poses, st);
-  const BodyPose& pa = PoseOf(poses, body_a_);
-  const BodyPose& pb = PoseOf(poses, body_b_);
-  if (!st->on_edge) {
-    const Eigen::Vector3d& n = st->pair_ext.direction;
-    r[0] = st->pair_ext.beta;
-    J_a = n.transpose() * contact::PointJacobian(pa, st->pair_eval.f.body.S);
-    J_b = -n.transpose() * contact::PointJacobian(pb, st->pair_eval.g.body.S);
+  if (!st->active) {  // a free slot: far apart, no gradient, nothing evaluated
+    r[0] = ContactSlotState::kInactiveDistance;
+    J_a.setZero();
+    J_b.setZero();
     return;
   }
-  // The edge: β = (E − G)·n along g's normal at an interior extremum of g, along the line
-  // between the points where the extremum is held on a bound (g's border, the curve's end).
-  const contact::CurveSurfaceExtremum& e = st->edge_ext;
-  const bool bound = e.at_bound[0] || e.at_bound[1] || e.at_bound[2];
-  const Eigen::Vector3d d = e.p_g - e.p_f;  // E − G (the solver's g is our edge)
-  const Eigen::Vector3d n = bound && d.norm() > 0.0
-                                ? Eigen::Vector3d((e.beta < 0.0 ? -1.0 : 1.0) * d.normalized())
-                                : Eigen::Vector3d(e.R_WCf.col(2));
-  r[0] = e.beta;
+  Update(poses, st);
+  if (!st->on_edge) {
+    face_.Evaluate(poses, st->face_state.get(), r, J_a, J_b);
+    return;
+  }
+  const BodyPose& pa = PoseOf(poses, body_a_);
+  const BodyPose& pb = PoseOf(poses, body_b_);
+  const Eigen::Vector3d& n = st->reported.direction;
+  r[0] = st->reported.beta;
   J_a = n.transpose() * contact::PointJacobian(pa, st->edge_eval.g.body.C);
   J_b = -n.transpose() * contact::PointJacobian(pb, st->edge_eval.f.body.S);
+}
+
+void TrimmedContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
+                                            const Eigen::Ref<const Eigen::VectorXd>& w,
+                                            TermHessian* h) const {
+  auto* st = static_cast<State*>(state);
+  if (!st->active) return;
+  Update(poses, st);
+  if (!st->on_edge) face_.AddWeightedHessian(poses, st->face_state.get(), w, h);
 }
 
 std::shared_ptr<TrimConstraintTerm> MakeTrimConstraint(TrimForm form, int body_a,

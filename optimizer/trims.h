@@ -31,9 +31,11 @@
 
 #include "contact/extremal.h"
 #include "contact/placed.h"
+#include "contact/trimmed.h"
 #include "nurbs/curve.h"
 #include "nurbs/surface.h"
 #include "nurbs/trim.h"
+#include "optimizer/contacts.h"
 #include "optimizer/term.h"
 
 namespace tangent::optimizer {
@@ -84,28 +86,37 @@ class TrimConstraintTerm final : public Term {
 /// The signed distance β between a trimmed surface f (body a) and a surface g (body b) that
 /// measures only f's material (docs/trimming.md, "Contacts at trims"), one row; as an inequality
 /// β ≥ 0 it is non-penetration against the part that exists. While the contact's extremal point
-/// u_e on f lies on the material, β is the face contact's (as SurfaceContactTerm). When u_e
-/// leaves the material the contact becomes an edge contact: β is the signed distance between
-/// the trim edge E(τ) = f(c(τ)) nearest u_e (its loop and curve from TrimmedDomain::Nearest)
-/// and g, at their curve–surface extremum, (E − G)·n_g. The switch is continuous: where u_e
-/// crosses the edge, the face's extremal point is on the edge and is the edge's extremum too
-/// (d ⟂ f's tangent plane, so d·E' = 0), so both forms give the same β there. Either way
+/// u_e on f lies on the material, β is the face contact's, measured, tracked and differentiated
+/// (with its Hessian) by a SurfaceContactTerm. When u_e leaves the material the contact becomes
+/// an edge contact: β is the signed distance between the trim edge E(τ) = f(c(τ)) nearest u_e
+/// (contact::MeasureTrimmed) and g, at their curve–surface extremum, (E − G)·n_g. The switch is
+/// continuous: where u_e crosses the edge, the face's extremal point is on the edge and is the
+/// edge's extremum too (d ⟂ f's tangent plane, so d·E' = 0), so both forms give the same β
+/// there. Either way
 ///   ∇β = n·(∂p_a/∂q − ∂p_b/∂q) at fixed parameters
-/// (the free parameters are stationary), n the direction the extremum measures β along.
+/// (the free parameters are stationary), n the direction the extremum measures β along. On the
+/// edge the Hessian is left to the solver's Gauss–Newton model.
 class TrimmedContactTerm final : public Term {
  public:
-  struct State final : TermState {
-    Eigen::Vector4d pair;                   ///< the face contact's tracked (u, v, s, t)
-    Eigen::Vector3d edge;                   ///< the edge contact's tracked (s, t, τ)
+  struct State final : ContactSlotState {
+    std::unique_ptr<TermState> face_state;  ///< the face contact's (a SurfaceContactTerm's)
+    contact::TrimEdges::Edge edge;          ///< the edge contact followed while on_edge
     bool on_edge = false;                   ///< the last evaluation measured the edge
-    int loop = -1, curve = -1, piece = -1;  ///< the edge measured: loop, curve, smooth piece
     int64_t switches = 0;                   ///< face → edge and edge → face changes
     Vector7d q_a, q_b;
     bool valid = false;
-    contact::SurfaceSurfaceExtremum pair_ext;
-    contact::SurfacePairEval pair_eval;
-    contact::CurveSurfaceExtremum edge_ext;
     contact::CurveSurfaceEval edge_eval;
+    /// The contact as reported: the face pair's parameters, and β, points and direction of what
+    /// is measured (the edge's while on_edge).
+    contact::SurfaceSurfaceExtremum reported;
+    SurfaceContactTerm::State& face() const {
+      return static_cast<SurfaceContactTerm::State&>(*face_state);
+    }
+    const contact::SurfaceSurfaceExtremum& extremum() const override { return reported; }
+    void Reseed(const Eigen::Vector4d& u_new) override {
+      face().Reseed(u_new);
+      valid = false;
+    }
   };
   /// The surfaces and the trim must outlive the term.
   TrimmedContactTerm(int body_a, const nurbs::NurbsSurface* f, const nurbs::TrimmedDomain* trim,
@@ -118,24 +129,18 @@ class TrimmedContactTerm final : public Term {
   std::unique_ptr<TermState> MakeState() const override;
   void Evaluate(const std::vector<BodyPose>& poses, TermState* state, Eigen::Ref<Eigen::VectorXd> r,
                 Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
+  bool has_hessian() const override { return true; }
+  void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
+                          const Eigen::Ref<const Eigen::VectorXd>& w,
+                          TermHessian* h) const override;
 
  private:
   void Update(const std::vector<BodyPose>& poses, State* st) const;
 
   int body_a_, body_b_;
-  const nurbs::NurbsSurface* f_;
-  const nurbs::TrimmedDomain* trim_;
   const nurbs::NurbsSurface* g_;
-  Eigen::Vector4d seed_;
-  /// Each loop's curves cut at their C⁰ knots (a polyline's vertices) into smooth pieces, in
-  /// order round the loop, over the curves' own parameters: the edge's extremal Newton runs on
-  /// one smooth piece; when its extremum stops at a piece's end it walks on to the neighbour,
-  /// and it stays at a corner only where both neighbours put it there.
-  struct Piece {
-    int curve = 0;
-    nurbs::NurbsCurve2d c;
-  };
-  std::vector<std::vector<Piece>> pieces_;
+  SurfaceContactTerm face_;
+  contact::TrimEdges edges_;
 };
 
 std::shared_ptr<TrimConstraintTerm> MakeTrimConstraint(TrimForm form, int body_a,

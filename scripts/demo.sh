@@ -6,6 +6,8 @@
 # Both processes run inside a private network namespace (unshare -rn; loopback up and multicast
 # routed to it), so LCM's UDP multicast works on any machine and nothing leaves this host.
 #   DEMO_SECONDS=20 bash scripts/demo.sh
+#   DEMO_SCENE=peg_in_hole bash scripts/demo.sh   (any scenes/NAME.json; a scenes/NAME.path.csv
+#                                                 beside it is the hand's path, else "drag")
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ -z "${TANGENT_DEMO_IN_NETNS:-}" ]; then
@@ -17,6 +19,10 @@ fi
 ip link set lo up
 ip route add 224.0.0.0/4 dev lo
 seconds=${DEMO_SECONDS:-20}
+scene=${DEMO_SCENE:-paperclips}
+[ -f "scenes/$scene.json" ] || { echo "DEMO_SCENE: no scenes/$scene.json" >&2; exit 2; }
+trajectory=drag
+[ -f "scenes/$scene.path.csv" ] && trajectory="scenes/$scene.path.csv"
 work=$(mktemp -d)
 cleanup() {
   if [ -n "${server:-}" ]; then kill -INT "$server" 2>/dev/null || true; fi
@@ -24,16 +30,20 @@ cleanup() {
 }
 trap cleanup EXIT
 
-echo "== tangentd: loading scenes/paperclips.json (offset meshes certified by CGAL)"
-./build/server/tangentd --scene scenes/paperclips.json --log build/tangentd.log > "$work/server.out" 2>&1 &
+echo "== tangentd: loading scenes/$scene.json (offset meshes certified by CGAL)"
+./build/server/tangentd --scene "scenes/$scene.json" --log build/tangentd.log > "$work/server.out" 2>&1 &
 server=$!
 until grep -q "^tangentd: scene" "$work/server.out"; do
   kill -0 "$server" 2>/dev/null || { cat "$work/server.out"; exit 1; }
   sleep 0.1
 done
 cat "$work/server.out"
-echo "== tangent-phantom: a simulated hand drags clip 2 for ${seconds} s (lift 6 mm, then circles)"
-./build/server/tangent-phantom --duration "$seconds" --trajectory drag --status \
+if [ "$trajectory" = drag ]; then
+  echo "== tangent-phantom: a simulated hand drags the grasped part for ${seconds} s (lift 6 mm, then circles)"
+else
+  echo "== tangent-phantom: a simulated hand follows $trajectory for ${seconds} s"
+fi
+./build/server/tangent-phantom --duration "$seconds" --trajectory "$trajectory" --status \
   --log build/phantom.csv > "$work/phantom.out"
 kill -INT "$server"
 wait "$server"

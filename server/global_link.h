@@ -14,8 +14,10 @@ namespace tangent::server {
 
 class GlobalLink {
  public:
-  /// The stage over the servo's scene (its surfaces and declared pairs).
-  explicit GlobalLink(const ServoLoop& servo, const contact::GlobalOptions& options = {})
+  /// The stage over the servo's scene (its surfaces, declared pairs and global_stage settings).
+  explicit GlobalLink(const ServoLoop& servo)
+      : stage_(servo.GlobalSurfaces(), servo.GlobalPairs(), servo.scene().global) {}
+  GlobalLink(const ServoLoop& servo, const contact::GlobalOptions& options)
       : stage_(servo.GlobalSurfaces(), servo.GlobalPairs(), options) {}
 
   /// One pass on `snapshot`: emit(const ContactEventMsg&) for each event, in order.

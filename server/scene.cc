@@ -208,7 +208,9 @@ void ParseSurfaces(const Node& root, double unit, const std::string& base_dir, S
     const int b = s.BodyIndex(body);
     if (b < 0) n.At("body").Fail("no body named \"" + body + "\"");
     DocumentTrim document_trim;
-    const nurbs::NurbsSurface local = MakeSurface(n, unit, base_dir, &document_trim);
+    nurbs::NurbsSurface local = MakeSurface(n, unit, base_dir, &document_trim);
+    // Its outward side (the normal) turned over: a cylinder as the wall of a hole.
+    if (n.Bool("reverse_normal", false)) local = nurbs::ReversedU(local);
     Eigen::Isometry3d X = Placement(n, unit);
     if (n.Has("centre_at")) {
       // Place the surface so its parameter-domain centre lands on this body-frame point.
@@ -237,7 +239,7 @@ void ParseSurfaces(const Node& root, double unit, const std::string& base_dir, S
       s.load_log.push_back("surface " + name + ": trimmed (" +
                            (ss.trim->has_outer() ? "an outer loop, " : "") + std::to_string(holes) +
                            " hole(s), " + std::to_string(ss.trim->chords().size()) +
-                           " certified chords); contacts do not use trims yet (issue 16)");
+                           " certified chords)");
     }
   }
 }
@@ -475,6 +477,21 @@ void ParseDevice(const Node& root, double unit, Scene* out) {
     s.offset_margin = o.Positive("margin", s.offset_margin / unit) * unit;
     s.offset_max_edge = o.Positive("max_edge", s.offset_max_edge / unit) * unit;
   }
+  if (root.Has("global_stage")) {
+    const Node g = root.At("global_stage");
+    contact::GlobalOptions& x = s.global;
+    x.activation = g.Positive("activation", x.activation / unit) * unit;
+    x.release = g.Positive("release", x.release / unit) * unit;
+    x.max_penetration = g.Positive("max_penetration", x.max_penetration / unit) * unit;
+    x.neglect_radius = g.Positive("neglect_radius", x.neglect_radius / unit) * unit;
+    if (!(x.release > x.activation)) g.At("release").Fail("must exceed \"activation\"");
+  }
+  if (s.global.release > s.offset_margin) {
+    (root.Has("offset") ? root.At("offset") : root.At("global_stage").At("release"))
+        .Fail("margin " + std::to_string(s.offset_margin / unit) +
+              " is below the global stage's release " + std::to_string(s.global.release / unit) +
+              ": contacts could part unseen");
+  }
 }
 
 // Offset meshes for the surfaces the global stage watches, certified (load log).
@@ -484,6 +501,15 @@ void BuildOffsetMeshes(Scene* out) {
     if (!sf.watched) continue;
     sf.mesh =
         nurbs::MakeOffsetMesh(sf.surface, s.offset_tolerance, s.offset_margin, s.offset_max_edge);
+    if (sf.trim) {
+      // Only the material is collided: cells that hold none are cut (the global stage never
+      // seeds in trimmed-away regions), cells the trim crosses kept whole.
+      const size_t before = sf.mesh.base.triangles.size();
+      sf.mesh.base = nurbs::CutAlongTrim(sf.mesh.base, *sf.trim);
+      s.load_log.push_back("offset mesh " + sf.name + ": cut along its trim, " +
+                           std::to_string(sf.mesh.base.triangles.size()) + " of " +
+                           std::to_string(before) + " triangles kept");
+    }
     s.load_log.push_back(nurbs::CertifyOffsetMesh(sf.surface, sf.mesh, 60).Report(sf.name));
   }
 }

@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include "contact/global.h"
 #include "nurbs/offset.h"
 #include "nurbs/surface.h"
 #include "nurbs/trim.h"
@@ -36,7 +37,8 @@ struct SceneSurface {
   nurbs::OffsetMesh mesh;       ///< offset mesh for the global stage (built for declared pairs)
   bool watched = false;         ///< in a declared contact pair
   /// The material that remains (docs/trimming.md): the surface entry's "trim", or its NURBS
-  /// document's. Validated at load; the servo's contacts do not use it yet (issue 16).
+  /// document's. Validated at load; contacts on it measure only the material, and its offset
+  /// mesh is cut along it.
   std::optional<nurbs::TrimmedDomain> trim;
 };
 
@@ -119,6 +121,11 @@ struct Scene {
   /// Longest grid-cell chord of the offset meshes, m: small blocks let the global stage skip the
   /// overlap around tracked contacts (docs/contact.md); keep it well below 4 x 1 mm.
   double offset_max_edge = 0.5e-3;
+  /// The global contact stage's settings ("global_stage": activation, release, max_penetration,
+  /// neglect_radius, in the scene's length unit; contact/global.h). The spheres of neglect must
+  /// cover where a tracked contact's offsets overlap, about √(4 r R) across for offset r and
+  /// relative curvature radius R: parts of centimetres need more than the paperclips' 1 mm.
+  contact::GlobalOptions global;
   std::vector<std::string> load_log;  ///< certification lines etc.
 
   /// Index of a body, surface or joint by name, -1 if none.

@@ -8,6 +8,7 @@
 
 #include "contact/rigid.h"
 #include "optimizer/joints.h"
+#include "optimizer/trims.h"
 
 namespace tangent::server {
 
@@ -83,7 +84,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   // Contacts present at the initial poses: one cold global pass.
   std::vector<contact::ContactEvent> events;
   {
-    contact::GlobalContactStage stage(GlobalSurfaces(), GlobalPairs(), contact::GlobalOptions{});
+    contact::GlobalContactStage stage(GlobalSurfaces(), GlobalPairs(), scene->global);
     stage.Run(poses_, {}, &events);
   }
   for (const ContactPairSpec& pair : scene->pairs) {
@@ -116,14 +117,27 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
       }
       auto term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface, seed);
       p.AddEquality(term);
-      slots_.push_back({lo, hi, -1, true, term});
+      slots_.push_back({lo, hi, -1, true, false, term});
       continue;
     }
     for (int m = 0; m < pair.max_contacts; ++m) {
-      auto term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface,
-                                                Eigen::Vector4d::Constant(0.5));
-      const int index = p.AddInequality(term);  // deactivated below, once solver_ has its data
-      slots_.push_back({lo, hi, p.inequalities()[static_cast<size_t>(index)].row, false, term});
+      // On a trimmed pair the contact measures only the material (the trimmed surface as the
+      // term's f; with both trimmed, the first one's trim: docs/trimming.md).
+      Slot slot{lo, hi, 0, false, false, nullptr};
+      const Eigen::Vector4d seed = Eigen::Vector4d::Constant(0.5);
+      if (f.trim) {
+        slot.term = std::make_shared<optimizer::TrimmedContactTerm>(f.body, &f.surface, &*f.trim,
+                                                                    g.body, &g.surface, seed);
+      } else if (g.trim) {
+        slot.swapped = true;
+        slot.term = std::make_shared<optimizer::TrimmedContactTerm>(g.body, &g.surface, &*g.trim,
+                                                                    f.body, &f.surface, seed);
+      } else {
+        slot.term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface, seed);
+      }
+      const int index = p.AddInequality(slot.term);  // deactivated below, once solver_ has data
+      slot.row = p.inequalities()[static_cast<size_t>(index)].row;
+      slots_.push_back(std::move(slot));
     }
   }
 
@@ -152,7 +166,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   // The per-solve data the tick changes: contact slots (free ones deactivated, then the cold
   // global pass's contacts), the grasp targets.
   for (Slot& s : slots_) {
-    s.state = &solver_->data().Of(*s.term);
+    s.state = &solver_->data().StateAs<optimizer::ContactSlotState>(*s.term);
     if (!s.floating) s.state->Deactivate();
   }
   for (const auto& e : events) Apply(ToEventMsg(e));  // (a cold pass only adds)
@@ -182,10 +196,33 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
 
 ServoLoop::~ServoLoop() = default;
 
+namespace {
+
+Eigen::Vector4d SwapPair(const Eigen::Vector4d& u) { return {u[2], u[3], u[0], u[1]}; }
+
+}  // namespace
+
+Eigen::Vector4d ServoLoop::Slot::U() const {
+  const Eigen::Vector4d& u = state->extremum().u;
+  return swapped ? SwapPair(u) : u;
+}
+
+Eigen::Vector3d ServoLoop::Slot::PointA() const {
+  return swapped ? state->extremum().p_g : state->extremum().p_f;
+}
+
+Eigen::Vector3d ServoLoop::Slot::PointB() const {
+  return swapped ? state->extremum().p_f : state->extremum().p_g;
+}
+
+void ServoLoop::Slot::Activate(const Eigen::Vector4d& u_pair) {
+  state->Activate(swapped ? SwapPair(u_pair) : u_pair);
+}
+
 std::vector<contact::GlobalSurface> ServoLoop::GlobalSurfaces() const {
   std::vector<contact::GlobalSurface> out;
   for (const SceneSurface& s : scene_->surfaces) {
-    out.push_back({s.body, &s.surface, s.watched ? &s.mesh : nullptr});
+    out.push_back({s.body, &s.surface, s.watched ? &s.mesh : nullptr, s.trim ? &*s.trim : nullptr});
   }
   return out;
 }
@@ -209,9 +246,9 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
       if (!free) free = &s;
       continue;
     }
-    const double d = contact::ParameterDistance(scene_->surfaces[static_cast<size_t>(lo)].surface,
-                                                scene_->surfaces[static_cast<size_t>(hi)].surface,
-                                                s.state->extremum().u, u);
+    const double d =
+        contact::ParameterDistance(scene_->surfaces[static_cast<size_t>(lo)].surface,
+                                   scene_->surfaces[static_cast<size_t>(hi)].surface, s.U(), u);
     if (d < nearest_d) {
       nearest_d = d;
       nearest = &s;
@@ -231,7 +268,7 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
   // 1e-3 of a domain apart), hence a bar at the stage's own same-point resolution.
   if (nearest && nearest_d < kSameContactParameters) return true;
   if (!free) return false;
-  free->state->Activate(u);
+  free->Activate(u);
   return true;
 }
 
@@ -586,12 +623,13 @@ void ServoLoop::FillSnapshot(Snapshot* s) const {
     c.surface_b = slot.surface_b;
     c.body_a = scene_->surfaces[static_cast<size_t>(c.surface_a)].body;
     c.body_b = scene_->surfaces[static_cast<size_t>(c.surface_b)].body;
-    const contact::SurfaceSurfaceExtremum& e = slot.state->extremum();
-    for (int i = 0; i < 4; ++i) c.u[i] = e.u[i];
-    c.beta = e.beta;
+    const Eigen::Vector4d u = slot.U();
+    const Eigen::Vector3d p_a = slot.PointA(), p_b = slot.PointB();
+    for (int i = 0; i < 4; ++i) c.u[i] = u[i];
+    c.beta = slot.state->extremum().beta;
     for (int i = 0; i < 3; ++i) {
-      c.p_a[i] = e.p_f[i];
-      c.p_b[i] = e.p_g[i];
+      c.p_a[i] = p_a[i];
+      c.p_b[i] = p_b[i];
     }
     c.force = slot.row >= 0 && slot.row < lambda.size()
                   ? scene_->device.stiffness * lambda[slot.row]

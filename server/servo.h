@@ -111,12 +111,20 @@ class ServoLoop {
 
  private:
   struct Slot {
-    int surface_a = 0, surface_b = 0;  ///< the pair's surfaces, a < b (the terms' f and g)
+    int surface_a = 0, surface_b = 0;  ///< the pair's surfaces, a < b
     int row = 0;                       ///< inequality row (multiplier index)
     bool floating = false;
-    std::shared_ptr<optimizer::SurfaceContactTerm> term;
-    optimizer::SurfaceContactTerm::State* state = nullptr;  ///< its data in solver_
-    Eigen::Vector4d good_u = Eigen::Vector4d::Zero();       ///< tracked parameters, last good tick
+    /// The term's f is surface_b and its g surface_a (a trimmed contact measures the trimmed
+    /// surface as its f): its parameters are (s, t, u, v) in the pair's order.
+    bool swapped = false;
+    optimizer::TermPtr term;  ///< a SurfaceContactTerm, or a TrimmedContactTerm on a trimmed pair
+    optimizer::ContactSlotState* state = nullptr;      ///< its data in solver_
+    Eigen::Vector4d good_u = Eigen::Vector4d::Zero();  ///< tracked parameters, last good tick
+    /// The contact in the pair's order (a's parameters first; p_a on a).
+    Eigen::Vector4d U() const;
+    Eigen::Vector3d PointA() const;
+    Eigen::Vector3d PointB() const;
+    void Activate(const Eigen::Vector4d& u_pair);
   };
 
   /// Moves the grasp targets toward the device's tool pose, at most the follow speeds times dt.

@@ -1,0 +1,99 @@
+#include "contact/trimmed.h"
+
+#include "nurbs/refinement.h"
+
+namespace tangent::contact {
+
+TrimEdges::TrimEdges(const nurbs::NurbsSurface* f, const nurbs::TrimmedDomain* trim)
+    : f_(f), trim_(trim) {
+  for (const nurbs::TrimLoop& loop : trim_->loops()) {
+    pieces_.emplace_back();
+    for (size_t ci = 0; ci < loop.curves.size(); ++ci) {
+      const nurbs::NurbsCurve2d& c = loop.curves[ci];
+      nurbs::NurbsCurve2d rest = c;
+      for (double knot : c.knots().Breakpoints()) {
+        const nurbs::KnotVector& k = rest.knots();
+        if (c.knots().Multiplicity(knot) < c.degree()) continue;  // C¹ or smoother there
+        if (!(knot > k.domain_begin() && knot < k.domain_end())) continue;
+        auto [left, right] = nurbs::Split(rest, knot);
+        pieces_.back().push_back({static_cast<int>(ci), std::move(left)});
+        rest = std::move(right);
+      }
+      pieces_.back().push_back({static_cast<int>(ci), std::move(rest)});
+    }
+  }
+}
+
+void TrimEdges::Start(const nurbs::TrimmedDomain::Closest& near, const Eigen::Vector2d& st,
+                      Edge* e) const {
+  const std::vector<Piece>& loop = pieces_[static_cast<size_t>(near.loop)];
+  int piece = 0;
+  for (size_t p = 0; p < loop.size(); ++p) {
+    const nurbs::KnotVector& k = loop[p].c.knots();
+    if (loop[p].curve == near.curve && near.t >= k.domain_begin() && near.t <= k.domain_end()) {
+      piece = static_cast<int>(p);
+      break;
+    }
+  }
+  e->loop = near.loop;
+  e->piece = piece;
+  e->curve = loop[static_cast<size_t>(piece)].curve;
+  e->u << st, near.t;
+}
+
+void TrimEdges::StartNear(const nurbs::TrimmedDomain::Closest& near, const nurbs::NurbsSurface& g,
+                          const BodyPose& pose_g, const BodyPose& pose_f, const Eigen::Vector2d& st,
+                          Edge* e) const {
+  Start(near, st, e);
+  int span = 0;
+  nurbs::SpanHint hint;
+  const Eigen::Vector3d E = pose_f.Point(Curve(*e).Evaluate(near.t, &span, &hint).C);
+  const PointSurfaceExtremum p = SolvePointSurface(E, g, pose_g, st);
+  if (p.u.allFinite()) e->u.head<2>() = p.u;
+}
+
+void TrimEdges::Solve(const nurbs::NurbsSurface& g, const BodyPose& pose_g, const BodyPose& pose_f,
+                      Edge* e) const {
+  const std::vector<Piece>& loop = pieces_[static_cast<size_t>(e->loop)];
+  const int n = static_cast<int>(loop.size());
+  int from = -1;
+  for (int walk = 0; walk <= n; ++walk) {
+    const Piece& x = loop[static_cast<size_t>(e->piece)];
+    e->ext = SolveCurveSurface(g, pose_g, BodyCurve(f_, &x.c), pose_f, e->u);
+    e->u = e->ext.u;
+    if (!e->ext.at_bound[2]) break;
+    const bool at_end = e->u[2] >= 0.5 * (x.c.knots().domain_begin() + x.c.knots().domain_end());
+    const int next = (e->piece + (at_end ? 1 : n - 1)) % n;
+    if (next == from) break;  // back where it came from: a corner between the two
+    from = e->piece;
+    e->piece = next;
+    const nurbs::KnotVector& k = loop[static_cast<size_t>(next)].c.knots();
+    e->u[2] = at_end ? k.domain_begin() : k.domain_end();
+  }
+  e->curve = loop[static_cast<size_t>(e->piece)].curve;
+}
+
+TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
+                              const nurbs::NurbsSurface& g, const BodyPose& pose_g,
+                              const SurfaceSurfaceExtremum& face) {
+  TrimmedMeasure m;
+  const Eigen::Vector2d uv = face.u.head<2>();
+  if (edges.trim().Contains(uv)) {
+    m.beta = face.beta;
+    m.p_f = face.p_f;
+    m.p_g = face.p_g;
+    m.status = face.status;
+    return m;
+  }
+  m.on_edge = true;
+  edges.StartNear(edges.trim().Nearest(uv), g, pose_g, pose_f, face.u.tail<2>(), &m.edge);
+  edges.Solve(g, pose_g, pose_f, &m.edge);
+  const CurveSurfaceExtremum& e = m.edge.ext;
+  m.beta = e.beta;
+  m.p_f = e.p_g;  // the solver's curve is f's edge, its surface g
+  m.p_g = e.p_f;
+  m.status = e.status;
+  return m;
+}
+
+}  // namespace tangent::contact

@@ -1,0 +1,86 @@
+#pragma once
+
+// Contacts on trimmed surfaces (docs/trimming.md, "Contacts at trims"): the distance between a
+// trimmed surface f and a surface g measured on f's material only. Where the extremal point of
+// the pair (f, g) lies on f's material it is the face contact's; where it lies off the material
+// the contact is an edge contact: the trim edge E(τ) = f(c(τ)) nearest that point against g, at
+// their curve–surface extremum (seed 001 Eqs. 22–24). The optimizer's TrimmedContactTerm and the
+// global stage both measure through here, so the servo and the stage agree on what is touching.
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "contact/extremal.h"
+#include "contact/placed.h"
+#include "nurbs/curve.h"
+#include "nurbs/surface.h"
+#include "nurbs/trim.h"
+
+namespace tangent::contact {
+
+/// A trimmed surface's edges, ready for curve–surface solves: each loop's curves cut at their
+/// C⁰ knots (a polyline's vertices) into smooth pieces, in order round the loop, over the
+/// curves' own parameters. The edge's extremal Newton runs on one smooth piece; when its
+/// extremum stops at a piece's end it walks on to the neighbour, and it stays at a corner only
+/// where both neighbours put it there.
+class TrimEdges {
+ public:
+  struct Piece {
+    int curve = 0;  ///< the loop's curve this piece is cut from
+    nurbs::NurbsCurve2d c;
+  };
+  /// An edge extremum being followed: which piece, and (s, t, τ) (g's parameters, then the
+  /// piece's curve parameter).
+  struct Edge {
+    int loop = -1, piece = -1, curve = -1;
+    Eigen::Vector3d u = Eigen::Vector3d::Zero();
+    CurveSurfaceExtremum ext;
+  };
+
+  /// f and its trim must outlive this.
+  TrimEdges(const nurbs::NurbsSurface* f, const nurbs::TrimmedDomain* trim);
+
+  const nurbs::NurbsSurface& surface() const { return *f_; }
+  const nurbs::TrimmedDomain& trim() const { return *trim_; }
+  const std::vector<std::vector<Piece>>& loops() const { return pieces_; }
+
+  /// Places *e on the piece holding `near` (TrimmedDomain::Nearest's closest point), g's
+  /// parameters `st`.
+  void Start(const nurbs::TrimmedDomain::Closest& near, const Eigen::Vector2d& st, Edge* e) const;
+  /// Same, with g's parameters those of g's point nearest the edge point (a point–surface solve
+  /// from `st`): the face pair's own point on g can lie far round g from where g meets the edge
+  /// (a ball over a hole: its lowest point against the rim's). Allocation free.
+  void StartNear(const nurbs::TrimmedDomain::Closest& near, const nurbs::NurbsSurface& g,
+                 const BodyPose& pose_g, const BodyPose& pose_f, const Eigen::Vector2d& st,
+                 Edge* e) const;
+  /// The edge's extremum against g (on body pose_g; f on pose_f) from *e, walking along the
+  /// loop while it stops at a piece's end (at most once round). Allocation free.
+  void Solve(const nurbs::NurbsSurface& g, const BodyPose& pose_g, const BodyPose& pose_f,
+             Edge* e) const;
+  /// The piece *e is on as a curve on f's body.
+  BodyCurve Curve(const Edge& e) const {
+    return BodyCurve(f_, &pieces_[static_cast<size_t>(e.loop)][static_cast<size_t>(e.piece)].c);
+  }
+
+ private:
+  const nurbs::NurbsSurface* f_;
+  const nurbs::TrimmedDomain* trim_;
+  std::vector<std::vector<Piece>> pieces_;
+};
+
+/// The distance between trimmed f and g on f's material, for a face extremum `face` of the pair
+/// (f, g) (its u: (u, v) on f, (s, t) on g): on the material, the face's; off it (or held on
+/// f's untrimmed border off the material), the nearest edge's against g. β > 0 apart.
+struct TrimmedMeasure {
+  bool on_edge = false;
+  TrimEdges::Edge edge;  ///< when on_edge
+  double beta = 0.0;
+  Eigen::Vector3d p_f = Eigen::Vector3d::Zero(), p_g = Eigen::Vector3d::Zero();
+  ExtremalStatus status = ExtremalStatus::kNotConverged;
+};
+TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
+                              const nurbs::NurbsSurface& g, const BodyPose& pose_g,
+                              const SurfaceSurfaceExtremum& face);
+
+}  // namespace tangent::contact
