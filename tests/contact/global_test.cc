@@ -321,5 +321,56 @@ TEST(GlobalTest, BadInputIsRejectedWithAMessage) {
   }
 }
 
+// A ball over a plate with a round hole (a trimmed plane): on the material the contact is the
+// face's; over the rim it is the rim's (the trim edge against the ball), with β the ball's
+// distance to the rim circle; over the middle of the hole there is none, though the plane
+// itself is within reach; lifted off the rim, the tracked edge contact is released.
+TEST(GlobalTest, ATrimmedPlateIsTouchedOnlyOnItsMaterialAndAtItsRim) {
+  const nurbs::NurbsSurface plate =
+      nurbs::MakePlanePatch({-20 * mm, -20 * mm, 0}, {40 * mm, 0, 0}, {0, 40 * mm, 0});
+  const nurbs::TrimmedDomain trim(
+      {0, 0}, {1, 1}, std::nullopt,
+      {nurbs::TrimLoop{{nurbs::MakeCircle2d({0.5, 0.5}, 0.125, true)}}});
+  nurbs::OffsetMesh plate_mesh = nurbs::MakeOffsetMesh(plate, 20e-6, 0.25e-3, 0.5e-3);
+  plate_mesh.base = nurbs::CutAlongTrim(plate_mesh.base, trim);
+  const nurbs::NurbsSurface ball = nurbs::MakeSphere({0, 0, 0}, 4 * mm);
+  const nurbs::OffsetMesh ball_mesh = nurbs::MakeOffsetMesh(ball, 20e-6, 0.25e-3, 0.5e-3);
+  GlobalOptions options;
+  options.neglect_radius = 3 * mm;
+  GlobalContactStage stage({{0, &plate, &plate_mesh, &trim}, {1, &ball, &ball_mesh, nullptr}},
+                           {{0, 1}}, options);
+  const BodyPose ground = BodyPose::FromCoordinates(
+      testing::Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()));
+  auto at = [](const Eigen::Vector3d& c) {
+    return BodyPose::FromCoordinates(testing::Coordinates(c, Eigen::Quaterniond::Identity()));
+  };
+  std::vector<ContactEvent> events;
+  // On the material, 0.05 mm above the plate.
+  stage.Run({ground, at({8 * mm, 1 * mm, 4.05 * mm})}, {}, &events);
+  ASSERT_EQ(stage.found().size(), 1u);
+  EXPECT_NEAR(stage.found()[0].beta, 0.05 * mm, 1e-12);
+  EXPECT_TRUE(trim.Contains(stage.found()[0].u.head<2>()));
+  // Over the rim: the ball 0.05 mm from the rim circle at (5, 0, 0) mm.
+  const double z = std::sqrt(4.05 * 4.05 - 2.5 * 2.5) * mm;
+  stage.Run({ground, at({2.5 * mm, 0, z})}, {}, &events);
+  ASSERT_EQ(stage.found().size(), 1u);
+  const GlobalContact rim = stage.found()[0];
+  EXPECT_FALSE(trim.Contains(rim.u.head<2>()));  // the face's point lies over the hole
+  EXPECT_NEAR(rim.beta, 0.05 * mm, 1e-12);
+  EXPECT_LT((rim.p_a - Eigen::Vector3d(5 * mm, 0, 0)).norm(), 1e-12);  // on the rim
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].kind, ContactEvent::Kind::kAdded);
+  // Tracked, then lifted 0.3 mm off the rim: released.
+  stage.Run({ground, at({2.5 * mm, 0, z + 0.4 * mm})}, {rim}, &events);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].kind, ContactEvent::Kind::kRemoved);
+  EXPECT_EQ(events[0].reason, ContactEvent::Reason::kSeparated);
+  // In the middle of the hole, its bottom 2 mm below the plate's plane: nothing (the plane
+  // there is trimmed away, the rim 1.4 mm off).
+  stage.Run({ground, at({0, 0, 2 * mm})}, {}, &events);
+  EXPECT_TRUE(stage.found().empty());
+  EXPECT_TRUE(events.empty());
+}
+
 }  // namespace
 }  // namespace tangent::contact

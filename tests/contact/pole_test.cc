@@ -10,7 +10,10 @@
 #include <numbers>
 #include <random>
 
+#include <Eigen/Geometry>
 #include "contact/extremal.h"
+#include "contact/tracker.h"
+
 #include "nurbs/primitives.h"
 
 namespace tangent::contact {
@@ -158,6 +161,63 @@ TEST(PoleTest, APairTouchingAtAPoleConvergesQuicklyToThePole) {
     EXPECT_LE(worst_iterations, 200) << "z " << z;
     std::printf("plate touching a dome's pole, z − r = %+.0e m: worst %d iterations\n", z - 3e-3,
                 worst_iterations);
+  }
+}
+
+// A ball whose pole faces a hole's wall (a cylinder turned inside out), moved until the pole
+// touches it and on into it (the peg-in-hole scene's end against its hole). The pair must stay
+// the pole and its foot on the wall, level with it: a touching pole pair once came back with
+// the wall's point 3.9 mm below the pole (d along the wall, β ≈ 0 along its normal), and the
+// ball went through the wall unopposed.
+TEST(PoleTest, ABallsPoleTouchingAHolesWallKeepsItsFoot) {
+  const nurbs::NurbsSurface wall =
+      nurbs::Transformed(nurbs::ReversedU(nurbs::MakeCylinder(5e-3, 10e-3)),
+                         Eigen::Isometry3d(Eigen::Translation3d(0, 0, -10e-3)));
+  // Poles along ±y (the sphere turned a quarter about x).
+  const nurbs::NurbsSurface ball = nurbs::Transformed(
+      nurbs::MakeSphere({0, 0, 0}, 4e-3),
+      Eigen::Isometry3d(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX())));
+  const BodyPose fixed = BodyPose::FromCoordinates(Coordinates({0, 0, 0}, {1, 0, 0, 0}));
+  Eigen::Vector4d u(0.75, 0.4, 0.509, 0.0);
+  double worst_foot = 0.0;
+  int steps = 0;
+  for (double y = 0.9e-3; y <= 1.0e-3 + 2e-7; y += 2e-9) {
+    const BodyPose ball_pose = BodyPose::FromCoordinates(Coordinates({0, y, -6e-3}, {1, 0, 0, 0}));
+    const SurfaceSurfaceExtremum e = SolveSurfaceSurface(wall, fixed, ball, ball_pose, u);
+    ASSERT_EQ(e.status, ExtremalStatus::kConverged) << "y " << y;
+    // The wall's point is level with the pole, and β is the pole's distance to the wall.
+    worst_foot = std::max(worst_foot, std::abs(e.p_f.z() + 6e-3));
+    ASSERT_LT(std::abs(e.p_f.z() + 6e-3), 1e-9) << "y " << y << " u " << e.u.transpose();
+    ASSERT_NEAR(e.beta, 1e-3 - y, 1e-12) << "y " << y;
+    u = e.u;
+    ++steps;
+  }
+  std::printf(
+      "ball's pole against a hole's wall: %d steps through touching, foot level to %.1e m\n", steps,
+      worst_foot);
+  // The same through the tracker (as the servo follows a contact): predict, correct, and take
+  // the corrected point only where it solves the contact equations.
+  ContactTracker tracker(wall, ball);
+  u << 0.75, 0.4, 0.509, 0.0;
+  bool tracking = false;
+  for (double y = 0.9e-3; y <= 1.0e-3 + 2e-7; y += 2e-9) {
+    const Vector7d q_ball = Coordinates({0, y, -6e-3}, {1, 0, 0, 0});
+    const BodyPose ball_pose = BodyPose::FromCoordinates(q_ball);
+    SurfaceSurfaceExtremum e;
+    SurfacePairEval at;
+    bool done = false;
+    if (tracking && tracker.Step(fixed.q, q_ball) == TrackStatus::kTracked) {
+      e = ExtremumAt(wall, fixed, ball, ball_pose, tracker.u(), 1e-12, &at);
+      done = e.status == ExtremalStatus::kConverged;
+    }
+    if (!done) {
+      e = SolveSurfaceSurface(wall, fixed, ball, ball_pose, u, {}, &at);
+      tracking = tracker.Reset(fixed.q, q_ball, e.u) == TrackStatus::kTracked;
+    }
+    ASSERT_LT(std::abs(e.p_f.z() + 6e-3), 1e-9)
+        << "tracked " << done << " y " << y << " u " << e.u.transpose();
+    ASSERT_NEAR(e.beta, 1e-3 - y, 1e-12) << "tracked " << done << " y " << y;
+    u = e.u;
   }
 }
 

@@ -56,6 +56,26 @@ TEST(PrimitivesTest, TransformedSurfaceIsTheMovedSurface) {
   EXPECT_LT(worst, 1e-14);
 }
 
+// S'(u, v) = S(a + b − u, v): the same points, u-derivatives negated, the normal turned over; a
+// surface with a non-uniform knot vector and weights (a torus) so the mirrored knots matter.
+// (Second u-derivatives are one-sided at the arcs' joints, so only first ones are compared.)
+TEST(PrimitivesTest, ReversedUIsTheSameSurfaceFacingTheOtherWay) {
+  const NurbsSurface torus = Transformed(MakeTorus(0.05, 0.01), Eigen::Isometry3d::Identity());
+  const NurbsSurface reversed = ReversedU(torus);
+  const double ab = torus.knots_u().domain_begin() + torus.knots_u().domain_end();
+  EXPECT_EQ(reversed.knots_u().domain_begin(), torus.knots_u().domain_begin());
+  EXPECT_EQ(reversed.knots_u().domain_end(), torus.knots_u().domain_end());
+  double worst = 0.0;
+  ForGrid(torus, 40, [&](double u, double v, const SurfacePoint& p) {
+    const SurfacePoint r = reversed.Evaluate(ab - u, v);
+    const Eigen::Vector3d n = p.S_u.cross(p.S_v), nr = r.S_u.cross(r.S_v);
+    worst = std::max({worst, (r.S - p.S).norm(), (r.S_u + p.S_u).norm(), (r.S_v - p.S_v).norm(),
+                      (nr + n).norm()});
+  });
+  EXPECT_LT(worst, 1e-13);
+  EXPECT_EQ(reversed.periodic_u(), torus.periodic_u());
+}
+
 TEST(PrimitivesTest, CylinderAndTorusRadii) {
   const NurbsSurface cyl = MakeCylinder(0.02, 0.1);
   const NurbsSurface torus = MakeTorus(0.05, 0.01);

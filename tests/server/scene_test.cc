@@ -11,7 +11,8 @@ namespace tangent::server {
 namespace {
 
 TEST(SceneTest, ExampleScenesLoad) {
-  for (const char* name : {"paperclips", "fourbar_point", "fourbar_floating", "finger_surface"}) {
+  for (const char* name :
+       {"paperclips", "fourbar_point", "fourbar_floating", "finger_surface", "peg_in_hole"}) {
     SCOPED_TRACE(name);
     const auto s = LoadScene(std::string(TANGENT_SCENES_DIR) + "/" + name + ".json");
     EXPECT_GE(s->mechanism.num_moving(), 1);
@@ -184,6 +185,38 @@ TEST(SceneTest, TrimsLoadAndBadLoopsNameTheLoop) {
             std::string::npos);
   EXPECT_NE(Error(TrimmedPlate(R"({"hole": []})")).find("/hole: unknown field"), std::string::npos);
   EXPECT_NE(Error(TrimmedPlate(R"({})")).find("no loop: give \"outer\" or \"holes\""),
+            std::string::npos);
+}
+
+// The peg-in-hole scene: its global-stage settings, the hole's wall facing its axis, the plate's
+// offset mesh cut along the hole; bad global_stage settings name the field.
+TEST(SceneTest, GlobalStageSettingsAndTurnedNormals) {
+  const auto s = LoadScene(std::string(TANGENT_SCENES_DIR) + "/peg_in_hole.json");
+  EXPECT_DOUBLE_EQ(s->global.neglect_radius, 3e-3);
+  EXPECT_DOUBLE_EQ(s->global.release, contact::GlobalOptions{}.release);
+  const SceneSurface& wall = s->surfaces[static_cast<size_t>(s->SurfaceIndex("hole_wall"))];
+  const nurbs::SurfacePoint p = wall.surface.Evaluate(0.3, 0.5, 1);
+  const Eigen::Vector3d n = p.S_u.cross(p.S_v).normalized();
+  const Eigen::Vector3d radial(p.S.x(), p.S.y(), 0.0);
+  EXPECT_NEAR(n.dot(radial.normalized()), -1.0, 1e-12);  // towards the axis
+  EXPECT_NEAR(radial.norm(), 5e-3, 1e-15);
+  const SceneSurface& top = s->surfaces[static_cast<size_t>(s->SurfaceIndex("plate_top"))];
+  EXPECT_FALSE(top.mesh.base.cells.empty());  // cut along the hole
+  EXPECT_LT(top.mesh.base.triangles.size(),
+            (top.mesh.base.u_lines.size() - 1) * (top.mesh.base.v_lines.size() - 1) * 2);
+  const std::string grasp = R"("grasp": {"body": "b"})";
+  EXPECT_NE(Error(Scene(kBody, grasp + R"(, "global_stage": {"neglect_radius": -1})"))
+                .find("bad.json: global_stage.neglect_radius: must be positive"),
+            std::string::npos);
+  EXPECT_NE(
+      Error(Scene(kBody, grasp + R"(, "global_stage": {"activation": 0.2e-3, "release": 0.1e-3})"))
+          .find("global_stage.release: must exceed \"activation\""),
+      std::string::npos);
+  EXPECT_NE(Error(Scene(kBody, grasp + R"(, "global_stage": {"release": 0.3e-3})"))
+                .find("is below the global stage's release"),
+            std::string::npos);
+  EXPECT_NE(Error(Scene(kBody, grasp + R"(, "offset": {"margin": 0.1e-3})"))
+                .find("offset: margin 0.0001"),
             std::string::npos);
 }
 
