@@ -57,6 +57,7 @@ void TrimEdges::Solve(const nurbs::NurbsSurface& g, const BodyPose& pose_g, cons
   const std::vector<Piece>& loop = pieces_[static_cast<size_t>(e->loop)];
   const int n = static_cast<int>(loop.size());
   int from = -1;
+  bool at_joint = false;
   for (int walk = 0; walk <= n; ++walk) {
     const Piece& x = loop[static_cast<size_t>(e->piece)];
     e->ext = SolveCurveSurface(g, pose_g, BodyCurve(f_, &x.c), pose_f, e->u);
@@ -64,13 +65,23 @@ void TrimEdges::Solve(const nurbs::NurbsSurface& g, const BodyPose& pose_g, cons
     if (!e->ext.at_bound[2]) break;
     const bool at_end = e->u[2] >= 0.5 * (x.c.knots().domain_begin() + x.c.knots().domain_end());
     const int next = (e->piece + (at_end ? 1 : n - 1)) % n;
-    if (next == from) break;  // back where it came from: a corner between the two
+    if (next == from) {  // back where it came from: the extremum is the joint between the two
+      at_joint = true;
+      break;
+    }
     from = e->piece;
     e->piece = next;
     const nurbs::KnotVector& k = loop[static_cast<size_t>(next)].c.knots();
     e->u[2] = at_end ? k.domain_begin() : k.domain_end();
   }
   e->curve = loop[static_cast<size_t>(e->piece)].curve;
+  // Held at a joint that both neighbours push into: the loop's extremum is that point (a corner,
+  // or a smooth joint such as a rational circle's quarter point), not a border of the loop,
+  // which has none. It stays flagged at_bound[2] (measured along the line between the points).
+  if (at_joint && e->ext.status == ExtremalStatus::kAtBoundary && !e->ext.at_bound[0] &&
+      !e->ext.at_bound[1]) {
+    e->ext.status = ExtremalStatus::kConverged;
+  }
 }
 
 TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,

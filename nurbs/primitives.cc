@@ -108,6 +108,26 @@ NurbsSurface MakeCylinder(double radius, double height) {
                  KnotVector(1, {0, 0, 1, 1}));
 }
 
+NurbsSurface MakeBarrel(double radius, double height, double crown) {
+  if (!(radius > 0.0) || !(height > 0.0) || !std::isfinite(radius) || !std::isfinite(height)) {
+    throw std::invalid_argument("barrel: radius and height must be positive");
+  }
+  const double half = 0.5 * height;
+  if (!(crown > half) || !std::isfinite(crown)) {
+    throw std::invalid_argument("barrel: crown radius must exceed half the height");
+  }
+  // The profile: one rational quadratic arc of the crown circle (centre radius − crown from the
+  // axis, at mid-height) from z = 0 to z = height; the middle control point where the end
+  // tangents meet, with weight cos of the half angle.
+  const double centre = radius - crown;
+  const double half_angle = std::asin(half / crown);
+  const double end = centre + crown * std::cos(half_angle);
+  if (!(end > 0.0)) throw std::invalid_argument("barrel: the ends would cross the axis");
+  const double c = std::cos(half_angle);
+  return Revolve(Eigen::Vector3d::Zero(), {{end, 0.0}, {centre + crown / c, half}, {end, height}},
+                 {1.0, c, 1.0}, KnotVector(2, {0, 0, 0, 1, 1, 1}));
+}
+
 NurbsSurface MakeTorus(double major, double minor) {
   if (!(minor > 0.0) || !(major > minor)) {
     std::ostringstream os;

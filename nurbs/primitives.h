@@ -27,6 +27,13 @@ NurbsSurface MakeSphere(const Eigen::Vector3d& center, double radius);
 /// Cylinder of `radius` about +z from z = 0 to z = height: u ∈ [0,1] around, v ∈ [0,1] along.
 NurbsSurface MakeCylinder(double radius, double height);
 
+/// Barrel about +z from z = 0 to z = height: the profile a circular arc of radius `crown` (the
+/// crown radius, > height / 2) whose widest point, `radius` from the axis, is at mid-height; the
+/// ends are radius − crown + √(crown² − height²/4) from the axis. u ∈ [0,1] around, v ∈ [0,1]
+/// along; the normal points outward. A crowned peg: against a hole's wall it touches at a point
+/// where a cylinder would touch along a line.
+NurbsSurface MakeBarrel(double radius, double height, double crown);
+
 /// Torus about +z: tube of radius `minor` around a circle of radius `major` in z = 0.
 /// u ∈ [0,1] around the axis, v ∈ [0,1] around the tube. @pre 0 < minor < major.
 NurbsSurface MakeTorus(double major, double minor);

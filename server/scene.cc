@@ -69,6 +69,10 @@ nurbs::NurbsSurface MakeSurface(const Node& n, double unit, const std::string& b
       return nurbs::MakeCylinder(unit * n.Positive("radius", 0.0),
                                  unit * n.Positive("height", 0.0));
     }
+    if (type == "barrel") {
+      return nurbs::MakeBarrel(unit * n.Positive("radius", 0.0), unit * n.Positive("height", 0.0),
+                               unit * n.Positive("crown", 0.0));
+    }
     if (type == "torus") {
       const double R = unit * n.Positive("major", 0.0), r = unit * n.Positive("minor", 0.0);
       if (!(r < R)) n.At("minor").Fail("must be less than \"major\"");
@@ -117,7 +121,7 @@ nurbs::NurbsSurface MakeSurface(const Node& n, double unit, const std::string& b
     n.Fail(e.what());
   }
   n.At("type").Fail("unknown surface type \"" + type +
-                    "\" (paperclip, sphere, cylinder, torus, plane_patch, sheared_patch, "
+                    "\" (paperclip, sphere, cylinder, barrel, torus, plane_patch, sheared_patch, "
                     "height_grid, nurbs)");
 }
 

@@ -360,6 +360,16 @@ TEST(GlobalTest, ATrimmedPlateIsTouchedOnlyOnItsMaterialAndAtItsRim) {
   EXPECT_LT((rim.p_a - Eigen::Vector3d(5 * mm, 0, 0)).norm(), 1e-12);  // on the rim
   ASSERT_EQ(events.size(), 1u);
   EXPECT_EQ(events[0].kind, ContactEvent::Kind::kAdded);
+  // Tracked where it is: kept, also where the rim's extremum lies on a joint of its pieces (the
+  // rational circle's quarter points; here its start, and a quarter turn on).
+  stage.Run({ground, at({2.5 * mm, 0, z})}, {rim}, &events);
+  EXPECT_TRUE(events.empty()) << ToString(events[0].reason);
+  stage.Run({ground, at({0, 2.5 * mm, z})}, {}, &events);
+  ASSERT_EQ(stage.found().size(), 1u);
+  const GlobalContact quarter = stage.found()[0];
+  EXPECT_LT((quarter.p_a - Eigen::Vector3d(0, 5 * mm, 0)).norm(), 1e-12);
+  stage.Run({ground, at({0, 2.5 * mm, z})}, {quarter}, &events);
+  EXPECT_TRUE(events.empty()) << ToString(events[0].reason);
   // Tracked, then lifted 0.3 mm off the rim: released.
   stage.Run({ground, at({2.5 * mm, 0, z + 0.4 * mm})}, {rim}, &events);
   ASSERT_EQ(events.size(), 1u);

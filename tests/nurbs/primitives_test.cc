@@ -76,6 +76,27 @@ TEST(PrimitivesTest, ReversedUIsTheSameSurfaceFacingTheOtherWay) {
   EXPECT_EQ(reversed.periodic_u(), torus.periodic_u());
 }
 
+// A barrel's profile is its crown circle: every point's distance from the crown circle's centre
+// (radius − crown from the axis, at mid-height, in the point's own meridian plane) is the crown
+// radius; the widest point is `radius` at mid-height; the normal points outward.
+TEST(PrimitivesTest, BarrelProfileIsTheCrownCircle) {
+  const double radius = 4e-3, height = 8e-3, crown = 20e-3;
+  const NurbsSurface barrel = MakeBarrel(radius, height, crown);
+  double worst = 0.0;
+  ForGrid(barrel, 40, [&](double, double, const SurfacePoint& p) {
+    const double rho = std::hypot(p.S.x(), p.S.y());
+    worst = std::max(worst,
+                     std::abs(std::hypot(rho - (radius - crown), p.S.z() - 0.5 * height) - crown));
+    const Eigen::Vector3d n = p.S_u.cross(p.S_v);
+    EXPECT_GT(n.dot(Eigen::Vector3d(p.S.x(), p.S.y(), 0.0)), 0.0);
+  });
+  EXPECT_LT(worst, 1e-17);
+  EXPECT_NEAR(std::hypot(barrel.Evaluate(0.3, 0.5).S.x(), barrel.Evaluate(0.3, 0.5).S.y()), radius,
+              1e-17);
+  EXPECT_NEAR(barrel.Evaluate(0.3, 1.0).S.z(), height, 1e-18);
+  EXPECT_THROW(MakeBarrel(radius, height, 3e-3), std::invalid_argument);  // crown < height / 2
+}
+
 TEST(PrimitivesTest, CylinderAndTorusRadii) {
   const NurbsSurface cyl = MakeCylinder(0.02, 0.1);
   const NurbsSurface torus = MakeTorus(0.05, 0.01);

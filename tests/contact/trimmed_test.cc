@@ -1,0 +1,86 @@
+// contact/trimmed.h: the distance on a trimmed surface's material. A ball over a hole whose
+// nearest rim point is a corner of the loop (a wedge of material pointing into the hole): the
+// edge's extremum is held at the joint of two pieces, both pushing into it, and that is the
+// contact (converged, the corner point), not a border of the loop; and a ball over a circular
+// hole measured at the rim through every quarter point of the circle (its pieces' joints).
+
+#include "contact/trimmed.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "nurbs/primitives.h"
+
+namespace tangent::contact {
+namespace {
+
+constexpr double mm = 1e-3;
+
+BodyPose At(const Eigen::Vector3d& p) {
+  Vector7d q;
+  q << p, 1, 0, 0, 0;
+  return BodyPose::FromCoordinates(q);
+}
+
+SurfaceSurfaceExtremum Face(const nurbs::NurbsSurface& plate, const nurbs::NurbsSurface& ball,
+                            const BodyPose& pose) {
+  // The plane's point under the ball's lowest point (the face pair).
+  const Eigen::Vector3d c = pose.q.head<3>();
+  return SolveSurfaceSurface(plate, At(Eigen::Vector3d::Zero()), ball, pose,
+                             Eigen::Vector4d(c.x() / (40 * mm), c.y() / (40 * mm), 0.5, 0.05));
+}
+
+TEST(TrimmedTest, ACornerOfTheLoopIsAContact) {
+  const nurbs::NurbsSurface plate =
+      nurbs::MakePlanePatch({0, 0, 0}, {40 * mm, 0, 0}, {0, 40 * mm, 0});
+  // A hole with a wedge of material pointing into it at (0.5, 0.5) (clockwise: material left).
+  const nurbs::TrimmedDomain trim(
+      {0, 0}, {1, 1}, std::nullopt,
+      {nurbs::TrimLoop{{nurbs::MakePolyline2d(
+          {{0.3, 0.3}, {0.3, 0.7}, {0.5, 0.5}, {0.7, 0.7}, {0.7, 0.3}, {0.3, 0.3}})}}});
+  const TrimEdges edges(&plate, &trim);
+  const nurbs::NurbsSurface ball = nurbs::MakeSphere({0, 0, 0}, 4 * mm);
+  // The ball under the wedge's tip (20, 20, 0) mm, 0.05 mm from it.
+  const double z = std::sqrt(4.05 * 4.05 - 2.0 * 2.0) * mm;
+  const BodyPose pose = At({20 * mm, 18 * mm, z});
+  const SurfaceSurfaceExtremum face = Face(plate, ball, pose);
+  ASSERT_FALSE(trim.Contains(face.u.head<2>()));
+  const TrimmedMeasure m = MeasureTrimmed(edges, At(Eigen::Vector3d::Zero()), ball, pose, face);
+  EXPECT_TRUE(m.on_edge);
+  EXPECT_EQ(m.status, ExtremalStatus::kConverged);
+  EXPECT_NEAR(m.beta, 0.05 * mm, 1e-12);
+  EXPECT_LT((m.p_f - Eigen::Vector3d(20 * mm, 20 * mm, 0)).norm(), 1e-12);
+}
+
+TEST(TrimmedTest, ARoundRimIsMeasuredThroughItsQuarterPoints) {
+  const nurbs::NurbsSurface plate =
+      nurbs::MakePlanePatch({0, 0, 0}, {40 * mm, 0, 0}, {0, 40 * mm, 0});
+  const nurbs::TrimmedDomain trim(
+      {0, 0}, {1, 1}, std::nullopt,
+      {nurbs::TrimLoop{{nurbs::MakeCircle2d({0.5, 0.5}, 0.125, true)}}});
+  const TrimEdges edges(&plate, &trim);
+  const nurbs::NurbsSurface ball = nurbs::MakeSphere({0, 0, 0}, 4 * mm);
+  const double z = std::sqrt(4.05 * 4.05 - 2.5 * 2.5) * mm;
+  int worst_status = 0;
+  double worst_beta = 0.0;
+  // Round the rim in 1/720 turns, and at each quarter point ± 1e-12 rad.
+  for (int k = 0; k <= 724; ++k) {
+    const double a = k <= 720 ? 2 * std::numbers::pi * k / 720
+                              : (k - 721) * std::numbers::pi / 2 + ((k % 2) ? 1e-12 : -1e-12);
+    const Eigen::Vector3d centre(20 * mm + 2.5 * mm * std::cos(a), 20 * mm + 2.5 * mm * std::sin(a),
+                                 z);
+    const BodyPose pose = At(centre);
+    const TrimmedMeasure m =
+        MeasureTrimmed(edges, At(Eigen::Vector3d::Zero()), ball, pose, Face(plate, ball, pose));
+    ASSERT_TRUE(m.on_edge) << k;
+    worst_status = std::max(worst_status, static_cast<int>(m.status));
+    worst_beta = std::max(worst_beta, std::abs(m.beta - 0.05 * mm));
+  }
+  EXPECT_EQ(worst_status, static_cast<int>(ExtremalStatus::kConverged));
+  EXPECT_LT(worst_beta, 1e-12);
+}
+
+}  // namespace
+}  // namespace tangent::contact
