@@ -15,21 +15,27 @@ namespace {
 using Matrix37 = Eigen::Matrix<double, 3, 7>;
 using Matrix14 = Eigen::Matrix<double, 14, 14>;
 
-// Derivative of the unit normal n = N/|N| along a parameter, from N's partial N_a.
+}  // namespace
+
+namespace internal {
+
 Eigen::Vector3d UnitNormalPartial(const Eigen::Vector3d& N, const Eigen::Vector3d& N_a) {
   const double len = N.norm();
   const Eigen::Vector3d n = N / len;
   return (N_a - n * n.dot(N_a)) / len;
 }
 
-void Split(const Matrix14& H, double w, TermHessian* h) {
+void Split(const Eigen::Matrix<double, 14, 14>& H, double w, TermHessian* h) {
   const Matrix14 S = 0.5 * w * (H + H.transpose());
   h->aa += S.topLeftCorner<7, 7>();
   h->ab += S.topRightCorner<7, 7>();
   h->bb += S.bottomRightCorner<7, 7>();
 }
 
-}  // namespace
+}  // namespace internal
+
+using internal::Split;
+using internal::UnitNormalPartial;
 
 // ---- Surface–surface -----------------------------------------------------------------------
 

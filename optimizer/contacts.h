@@ -155,6 +155,13 @@ class PointOnSurfaceTerm final : public Term {
   Eigen::Vector2d seed_;
 };
 
+namespace internal {
+/// Derivative of the unit normal n = N/|N| along a parameter, from N's partial N_a.
+Eigen::Vector3d UnitNormalPartial(const Eigen::Vector3d& N, const Eigen::Vector3d& N_a);
+/// Adds w·sym(H), a Hessian over (q_a, q_b), into h's blocks (the contact terms' Hessians).
+void Split(const Eigen::Matrix<double, 14, 14>& H, double w, TermHessian* h);
+}  // namespace internal
+
 std::shared_ptr<SurfaceContactTerm> MakeSurfaceContact(int body_f, const nurbs::NurbsSurface* f,
                                                        int body_g, const nurbs::NurbsSurface* g,
                                                        const Eigen::Vector4d& seed);

@@ -94,8 +94,10 @@ class TrimConstraintTerm final : public Term {
 /// edge's extremum too (d ⟂ f's tangent plane, so d·E' = 0), so both forms give the same β
 /// there. Either way
 ///   ∇β = n·(∂p_a/∂q − ∂p_b/∂q) at fixed parameters
-/// (the free parameters are stationary), n the direction the extremum measures β along. On the
-/// edge the Hessian is left to the solver's Gauss–Newton model.
+/// (the free parameters are stationary), n the direction the extremum measures β along. The
+/// Hessian: the face contact's on the face; on the edge the same formula with the curve in
+/// place of f (trims.cc), and the solver's Gauss–Newton model where the edge's extremum is held
+/// on a bound.
 class TrimmedContactTerm final : public Term {
  public:
   struct State final : ContactSlotState {

@@ -231,7 +231,7 @@ TEST(TrimsTest, ATrimmedContactMeasuresTheRimOverAHoleWithExactJacobians) {
   HoleScene s;
   std::mt19937_64 rng(17);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  double worst[2] = {0.0, 0.0};
+  double worst[2] = {0.0, 0.0}, worst_h[2] = {0.0, 0.0};
   for (int trial = 0; trial < 12; ++trial) {
     // Over the hole near its rim (the edge form) or over the plate (the face form), well away
     // from the switch so that ±h stays on one side.
@@ -265,8 +265,34 @@ TEST(TrimsTest, ATrimmedContactMeasuresTheRimOverAHoleWithExactJacobians) {
       EXPECT_NEAR(fd, g[k], 1e-7) << (over_hole ? "edge" : "face") << " trial " << trial << " q"
                                   << k;
     }
+    // The Hessian (the face's through SurfaceContactTerm, the edge's own) against central
+    // differences of the analytic gradient, weighted.
+    Value(s.mech, *term, state.get(), q, nullptr);
+    const double w = 0.7;
+    TermHessian h;
+    h.SetZero();
+    term->AddWeightedHessian(poses, state.get(), Eigen::VectorXd::Constant(1, w), &h);
+    h.Fold(q.segment<4>(3), q.segment<4>(10));
+    Eigen::Matrix<double, 14, 14> H;
+    H << h.aa, h.ab, h.ab.transpose(), h.bb;
+    for (int k = 0; k < 14; ++k) {
+      Eigen::VectorXd qp = q, qm = q;
+      qp[k] += kH;
+      qm[k] -= kH;
+      Eigen::Matrix<double, 1, 14> gp, gm;
+      Value(s.mech, *term, state.get(), qp, &gp);
+      Value(s.mech, *term, state.get(), qm, &gm);
+      const double err = (w * (gp - gm) / (2 * kH) - H.row(k)).cwiseAbs().maxCoeff() /
+                         std::max(1.0, H.row(k).cwiseAbs().maxCoeff());
+      worst_h[over_hole] = std::max(worst_h[over_hole], err);
+      EXPECT_LT(err, 1e-5) << (over_hole ? "edge" : "face") << " trial " << trial << " Hessian row "
+                           << k;
+    }
   }
-  std::printf("largest |J − FD|: face %.2e, edge %.2e\n", worst[0], worst[1]);
+  std::printf(
+      "largest |J − FD|: face %.2e, edge %.2e; largest |H − FD(J)| (relative): face "
+      "%.2e, edge %.2e\n",
+      worst[0], worst[1], worst_h[0], worst_h[1]);
 }
 
 TEST(TrimsTest, ATrimmedContactIsContinuousAcrossTheRim) {
