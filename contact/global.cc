@@ -596,17 +596,17 @@ struct OnMaterial {
 };
 OnMaterial MeasureOnMaterial(const Watched& wa, const BodyPose& pa, const Watched& wb,
                              const BodyPose& pb, const SurfaceSurfaceExtremum& e) {
-  OnMaterial m{false, e.beta, e.p_f, e.p_g, e.status};
-  if (wa.edges && !wa.s.trim->Contains(e.u.head<2>())) {
+  if (wa.edges) {
     const TrimmedMeasure t = MeasureTrimmed(*wa.edges, pa, *wb.s.surface, pb, e);
-    m = {true, t.beta, t.p_f, t.p_g, t.status};
-  } else if (wb.edges && !wb.s.trim->Contains(e.u.tail<2>())) {
+    if (t.on_edge) return {true, t.beta, t.p_f, t.p_g, t.status};
+  }
+  if (wb.edges) {
     SurfaceSurfaceExtremum swapped = e;
     swapped.u << e.u.tail<2>(), e.u.head<2>();
     const TrimmedMeasure t = MeasureTrimmed(*wb.edges, pb, *wa.s.surface, pa, swapped);
-    m = {true, t.beta, t.p_g, t.p_f, t.status};
+    if (t.on_edge) return {true, t.beta, t.p_g, t.p_f, t.status};
   }
-  return m;
+  return {false, e.beta, e.p_f, e.p_g, e.status};
 }
 
 // The minima beside a saddle of the distance (relative_curvature.h): the surfaces cross along

@@ -86,7 +86,7 @@ void TrimEdges::Solve(const nurbs::NurbsSurface& g, const BodyPose& pose_g, cons
 
 TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
                               const nurbs::NurbsSurface& g, const BodyPose& pose_g,
-                              const SurfaceSurfaceExtremum& face) {
+                              const SurfaceSurfaceExtremum& face, const TrimEdges::Edge* from) {
   TrimmedMeasure m;
   const Eigen::Vector2d uv = face.u.head<2>();
   if (edges.trim().Contains(uv)) {
@@ -97,7 +97,12 @@ TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
     return m;
   }
   m.on_edge = true;
-  edges.StartNear(edges.trim().Nearest(uv), g, pose_g, pose_f, face.u.tail<2>(), &m.edge);
+  const nurbs::TrimmedDomain::Closest near = edges.trim().Nearest(uv);
+  if (from && from->loop == near.loop) {
+    m.edge = *from;
+  } else {
+    edges.StartNear(near, g, pose_g, pose_f, face.u.tail<2>(), &m.edge);
+  }
   edges.Solve(g, pose_g, pose_f, &m.edge);
   const CurveSurfaceExtremum& e = m.edge.ext;
   m.beta = e.beta;

@@ -71,7 +71,9 @@ class TrimEdges {
 
 /// The distance between trimmed f and g on f's material, for a face extremum `face` of the pair
 /// (f, g) (its u: (u, v) on f, (s, t) on g): on the material, the face's; off it (or held on
-/// f's untrimmed border off the material), the nearest edge's against g. β > 0 apart.
+/// f's untrimmed border off the material), the nearest edge's against g. β > 0 apart. The edge
+/// is followed from `from` (an earlier measure's edge) when that is on the loop nearest the face
+/// point, else started there (TrimEdges::StartNear). Allocation free.
 struct TrimmedMeasure {
   bool on_edge = false;
   TrimEdges::Edge edge;  ///< when on_edge
@@ -81,6 +83,7 @@ struct TrimmedMeasure {
 };
 TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
                               const nurbs::NurbsSurface& g, const BodyPose& pose_g,
-                              const SurfaceSurfaceExtremum& face);
+                              const SurfaceSurfaceExtremum& face,
+                              const TrimEdges::Edge* from = nullptr);
 
 }  // namespace tangent::contact

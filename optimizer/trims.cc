@@ -152,34 +152,30 @@ void TrimmedContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   SurfaceContactTerm::State& face = st->face();
   face.active = true;
   face_.Update(poses, &face);
-  const contact::SurfaceSurfaceExtremum& e = face.ext;
-  const Eigen::Vector2d u_e = e.u.head<2>();
+  // The edge is followed from its last extremum while the contact stays on the same loop's
+  // edge (contact::MeasureTrimmed), else started at the loop point nearest the face's.
   const bool was_on_edge = st->on_edge;
-  st->on_edge = !edges_.trim().Contains(u_e);
-  st->reported = e;
+  const contact::TrimmedMeasure m = contact::MeasureTrimmed(
+      edges_, pa, *g_, pb, face.ext, was_on_edge && st->valid ? &st->edge : nullptr);
+  st->on_edge = m.on_edge;
+  st->reported = face.ext;
   if (st->on_edge) {
-    // The edge nearest the face's extremal point; tracked from the last edge extremum while it
-    // stays on the same loop, else started at the nearest point of the new one.
-    const nurbs::TrimmedDomain::Closest near = edges_.trim().Nearest(u_e);
-    if (!was_on_edge || !st->valid || near.loop != st->edge.loop) {
-      edges_.StartNear(near, *g_, pb, pa, e.u.tail<2>(), &st->edge);
-    }
-    edges_.Solve(*g_, pb, pa, &st->edge);
+    st->edge = m.edge;
     nurbs::SpanHint hint_g, hint_f;
     int span = 0;
     contact::EvaluateCurveSurface(*g_, pb, edges_.Curve(st->edge), pa, st->edge.u, &hint_g, &span,
                                   &hint_f, &st->edge_eval);
     // β = (E − G)·n along g's normal at an interior extremum of g, along the line between the
-    // points where the extremum is held on a bound (g's border, the curve's end).
+    // points where the extremum is held on a bound (g's border, a joint of the loop).
     const contact::CurveSurfaceExtremum& x = st->edge.ext;
     const bool bound = x.at_bound[0] || x.at_bound[1] || x.at_bound[2];
-    const Eigen::Vector3d d = x.p_g - x.p_f;  // E − G (the solver's curve is our edge)
-    st->reported.beta = x.beta;
-    st->reported.p_f = x.p_g;
-    st->reported.p_g = x.p_f;
-    st->reported.status = x.status;
+    const Eigen::Vector3d d = m.p_f - m.p_g;  // E − G
+    st->reported.beta = m.beta;
+    st->reported.p_f = m.p_f;
+    st->reported.p_g = m.p_g;
+    st->reported.status = m.status;
     st->reported.direction = bound && d.norm() > 0.0
-                                 ? Eigen::Vector3d((x.beta < 0.0 ? -1.0 : 1.0) * d.normalized())
+                                 ? Eigen::Vector3d((m.beta < 0.0 ? -1.0 : 1.0) * d.normalized())
                                  : Eigen::Vector3d(x.R_WCf.col(2));
   }
   st->switches += st->valid && was_on_edge != st->on_edge;
