@@ -11,6 +11,7 @@
 #include "nurbs/primitives.h"
 #include "optimizer/contacts.h"
 #include "testing/contact_scenes.h"
+#include "testing/term_derivatives.h"
 
 namespace tangent::optimizer {
 namespace {
@@ -53,40 +54,23 @@ const contact::PointSurfaceExtremum& Extremum(const PointOnSurfaceTerm&, TermSta
   return static_cast<PointOnSurfaceTerm::State*>(st)->extremum();
 }
 
-// β and ∇β at q through a term (which tracks from its last parameters).
-double Value(const Mechanism& m, const Term& t, TermState* st, const Eigen::VectorXd& q,
-             Eigen::Matrix<double, 1, 14>* grad) {
-  std::vector<BodyPose> poses;
-  m.Poses(q, &poses);
-  Eigen::VectorXd r(1);
-  Eigen::MatrixXd Ja(1, 7), Jb(1, 7);
-  t.Evaluate(poses, st, r, Ja, Jb);
-  if (grad) *grad << Ja, Jb;
-  return r[0];
-}
+constexpr auto* Value = &testing::TermValue;  // β and ∇β at q through a term
 
 void CheckDerivatives(const Mechanism& m, const Term& t, TermState* st, const Eigen::VectorXd& q,
                       double tol_j, double tol_h) {
   Eigen::Matrix<double, 1, 14> g;
   Value(m, t, st, q, &g);
-  std::vector<BodyPose> poses;
-  m.Poses(q, &poses);
   const double w = 0.7;
-  TermHessian h;
-  h.SetZero();
-  t.AddWeightedHessian(poses, st, Eigen::VectorXd::Constant(1, w), &h);
-  h.Fold(q.segment<4>(3), q.segment<4>(10));
-  Eigen::Matrix<double, 14, 14> H;
-  H << h.aa, h.ab, h.ab.transpose(), h.bb;
+  const Eigen::Matrix<double, 14, 14> H = testing::TermHessianAt(m, t, st, q, w);
+  const Eigen::Matrix<double, 14, 14> fd = testing::GradientDifferences(m, t, st, q, w, kH);
   for (int k = 0; k < 14; ++k) {
     Eigen::VectorXd qp = q, qm = q;
     qp[k] += kH;
     qm[k] -= kH;
-    Eigen::Matrix<double, 1, 14> gp, gm;
-    const double fp = Value(m, t, st, qp, &gp), fm = Value(m, t, st, qm, &gm);
+    const double fp = Value(m, t, st, qp, nullptr), fm = Value(m, t, st, qm, nullptr);
     EXPECT_NEAR((fp - fm) / (2 * kH), g[k], tol_j) << t.name() << " coordinate " << k;
-    const Eigen::Matrix<double, 1, 14> fd = w * (gp - gm) / (2 * kH);
-    EXPECT_LT((fd - H.row(k)).cwiseAbs().maxCoeff(), tol_h) << t.name() << " Hessian row " << k;
+    EXPECT_LT((fd.row(k) - H.row(k)).cwiseAbs().maxCoeff(), tol_h)
+        << t.name() << " Hessian row " << k;
   }
   Value(m, t, st, q, nullptr);  // Leave the term at q.
 }

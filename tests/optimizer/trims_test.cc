@@ -17,6 +17,7 @@
 #include "optimizer/contacts.h"
 #include "optimizer/goals.h"
 #include "optimizer/solver.h"
+#include "testing/term_derivatives.h"
 
 namespace tangent::optimizer {
 namespace {
@@ -59,16 +60,7 @@ Eigen::VectorXd Place(const Scene& s, const Eigen::Vector2d& uv, double height,
   return q;
 }
 
-double Value(const Mechanism& m, const Term& t, TermState* st, const Eigen::VectorXd& q,
-             Eigen::Matrix<double, 1, 14>* grad) {
-  std::vector<BodyPose> poses;
-  m.Poses(q, &poses);
-  Eigen::VectorXd r(1);
-  Eigen::MatrixXd Ja(1, 7), Jb(1, 7);
-  t.Evaluate(poses, st, r, Ja, Jb);
-  if (grad) *grad << Ja, Jb;
-  return r[0];
-}
+constexpr auto* Value = &testing::TermValue;  // β and ∇β at q through a term
 
 // The term at q, seeded from sampled closest pairs, with both extrema converged and interior.
 struct Placed {
@@ -267,22 +259,13 @@ TEST(TrimsTest, ATrimmedContactMeasuresTheRimOverAHoleWithExactJacobians) {
     }
     // The Hessian (the face's through SurfaceContactTerm, the edge's own) against central
     // differences of the analytic gradient, weighted.
-    Value(s.mech, *term, state.get(), q, nullptr);
     const double w = 0.7;
-    TermHessian h;
-    h.SetZero();
-    term->AddWeightedHessian(poses, state.get(), Eigen::VectorXd::Constant(1, w), &h);
-    h.Fold(q.segment<4>(3), q.segment<4>(10));
-    Eigen::Matrix<double, 14, 14> H;
-    H << h.aa, h.ab, h.ab.transpose(), h.bb;
+    const Eigen::Matrix<double, 14, 14> H =
+        testing::TermHessianAt(s.mech, *term, state.get(), q, w);
+    const Eigen::Matrix<double, 14, 14> fd =
+        testing::GradientDifferences(s.mech, *term, state.get(), q, w, kH);
     for (int k = 0; k < 14; ++k) {
-      Eigen::VectorXd qp = q, qm = q;
-      qp[k] += kH;
-      qm[k] -= kH;
-      Eigen::Matrix<double, 1, 14> gp, gm;
-      Value(s.mech, *term, state.get(), qp, &gp);
-      Value(s.mech, *term, state.get(), qm, &gm);
-      const double err = (w * (gp - gm) / (2 * kH) - H.row(k)).cwiseAbs().maxCoeff() /
+      const double err = (fd.row(k) - H.row(k)).cwiseAbs().maxCoeff() /
                          std::max(1.0, H.row(k).cwiseAbs().maxCoeff());
       worst_h[over_hole] = std::max(worst_h[over_hole], err);
       EXPECT_LT(err, 1e-5) << (over_hole ? "edge" : "face") << " trial " << trial << " Hessian row "

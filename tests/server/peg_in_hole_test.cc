@@ -8,7 +8,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <numbers>
 #include <sstream>
@@ -84,11 +83,6 @@ PegRun RunPegInHole(const Scene& scene) {
         const Eigen::Vector3d F(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
         EXPECT_TRUE(F.allFinite());
         run.max_force = std::max(run.max_force, F.norm());
-        if ((F - last_force).norm() > 0.05 && std::getenv("PEG_DEBUG"))
-          std::printf("force step %.3f N at t %.3f s\n", (F - last_force).norm(), 1e-3 * k);
-        if ((F - last_force).norm() > 0.05)
-          std::printf("DBG force step %.3f N at t %.4f\n", (F - last_force).norm(),
-                      1e-3 * k + 2.5e-4 * tick);
         run.max_force_step = std::max(run.max_force_step, (F - last_force).norm());
         last_force = F;
       }
@@ -138,13 +132,7 @@ PegRun RunPegInHole(const Scene& scene) {
     run.end_height = centre.z();
     if (k % 4 == 3) {
       const auto t0 = std::chrono::steady_clock::now();
-      link.Pass(snap, [&](const ContactEventMsg& m) {
-        if (std::getenv("PEG_DEBUG"))
-          std::printf("t %.3f event %s %d-%d u %.4f %.4f %.4f %.4f\n", 1e-3 * k,
-                      m.added ? "add" : "remove", m.surface_a, m.surface_b, m.u[0], m.u[1], m.u[2],
-                      m.u[3]);
-        run.events += servo.Apply(m);
-      });
+      link.Pass(snap, [&](const ContactEventMsg& m) { run.events += servo.Apply(m); });
       run.pass_seconds += Seconds(t0);
     }
   }
