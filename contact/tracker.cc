@@ -42,6 +42,17 @@ TrackStatus ContactTracker::Step(const Vector7d& q_f, const Vector7d& q_g) {
   Eigen::Matrix<double, 14, 1> dq;
   dq << q_f - q_f_, q_g - q_g_;
   u_ += u_q_ * dq;
+  if (options_.corrector_steps <= 0) {
+    // No corrector: only the residual tells a prediction that left the basin.
+    const TrackStatus s = Evaluate(q_f, q_g, /*correct=*/false);
+    if (s == TrackStatus::kTracked && residual_ > options_.max_residual)
+      status_ = TrackStatus::kLost;
+    return status_;
+  }
+  for (int k = 1; k < options_.corrector_steps; ++k) {
+    const TrackStatus s = Evaluate(q_f, q_g, /*correct=*/true);
+    if (s == TrackStatus::kLost || s == TrackStatus::kSingular) return s;
+  }
   return Evaluate(q_f, q_g, /*correct=*/true);
 }
 

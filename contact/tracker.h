@@ -27,12 +27,16 @@ struct TrackerOptions {
   /// one Newton step from a residual r leaves about r², so 1e-3 still corrects to ~1e-6 and
   /// the next step's prediction finishes the job.
   double max_residual = 1e-3;
+  /// Newton corrector steps per Step() (0–3): 0 takes the predicted point as it is, each step
+  /// costs one more evaluation of the pair. u_q and β come from the last evaluated point.
+  int corrector_steps = 1;
 };
 
 /// Follows one extremal pair of two surfaces as the bodies move (seed 001 §3.3, design.md §2
-/// step 2): predictor u += u_q Δq, one Newton corrector on the contact equations, and the
-/// closed-form u_q refreshed from the same evaluation. Holds references to the surfaces (which
-/// must outlive it) and fixed-size state only: Step() allocates nothing and never throws.
+/// step 2): predictor u += u_q Δq, Newton correctors on the contact equations (one by default,
+/// TrackerOptions::corrector_steps), and the closed-form u_q refreshed from the last evaluation.
+/// Holds references to the surfaces (which must outlive it) and fixed-size state only: Step()
+/// allocates nothing and never throws.
 class ContactTracker {
  public:
   ContactTracker(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,

@@ -40,15 +40,22 @@ using internal::UnitNormalPartial;
 // ---- Surface–surface -----------------------------------------------------------------------
 
 SurfaceContactTerm::SurfaceContactTerm(int body_f, const nurbs::NurbsSurface* f, int body_g,
-                                       const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed)
-    : body_f_(body_f), body_g_(body_g), f_(f), g_(g), seed_(seed) {
+                                       const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed,
+                                       const ContactTracking& tracking)
+    : body_f_(body_f), body_g_(body_g), f_(f), g_(g), seed_(seed), tracking_(tracking) {
   if (!f || !g) throw std::invalid_argument("surface contact: null surface");
   if (body_f == body_g) throw std::invalid_argument("surface contact: both surfaces on one body");
   if (!seed.allFinite()) throw std::invalid_argument("surface contact: non-finite seed");
+  if (tracking.corrector_steps < 0 || tracking.corrector_steps > 3)
+    throw std::invalid_argument("surface contact: corrector_steps must be 0 to 3");
+  if (!(tracking.accept_residual >= kTrackedResidual))
+    throw std::invalid_argument("surface contact: accept_residual must be at least 1e-12");
 }
 
 std::unique_ptr<TermState> SurfaceContactTerm::MakeState() const {
-  auto st = std::make_unique<State>(*f_, *g_);
+  contact::TrackerOptions options;
+  options.corrector_steps = tracking_.corrector_steps;
+  auto st = std::make_unique<State>(*f_, *g_, options);
   st->u = seed_;
   return st;
 }
@@ -61,7 +68,8 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   if (st->tracking) {
     st->track_status = st->tracker.Step(pf.q, pg.q);
     if (st->track_status == contact::TrackStatus::kTracked) {
-      st->ext = contact::ExtremumAt(*f_, pf, *g_, pg, st->tracker.u(), kTrackedResidual, &st->eval);
+      st->ext = contact::ExtremumAt(*f_, pf, *g_, pg, st->tracker.u(), tracking_.accept_residual,
+                                    &st->eval);
       done = st->ext.status == contact::ExtremalStatus::kConverged;
     } else if (st->track_status == contact::TrackStatus::kLost) {
       ++st->lost;
@@ -299,8 +307,9 @@ void PointOnSurfaceTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
 
 std::shared_ptr<SurfaceContactTerm> MakeSurfaceContact(int body_f, const nurbs::NurbsSurface* f,
                                                        int body_g, const nurbs::NurbsSurface* g,
-                                                       const Eigen::Vector4d& seed) {
-  return std::make_shared<SurfaceContactTerm>(body_f, f, body_g, g, seed);
+                                                       const Eigen::Vector4d& seed,
+                                                       const ContactTracking& tracking) {
+  return std::make_shared<SurfaceContactTerm>(body_f, f, body_g, g, seed, tracking);
 }
 
 std::shared_ptr<PointOnSurfaceTerm> MakePointOnSurface(const Attachment& point, int body_s,

@@ -40,6 +40,19 @@ struct ContactSlotState : TermState {
   void Deactivate() { active = false; }
 };
 
+/// How a contact term follows its pair between solves: the tracker's corrector steps and when
+/// its point is taken as the contact. The defaults are exact: the point is the extremum to the
+/// extremal solver's own tolerance, else a full solve runs. docs/benchmarks.md measures what
+/// other settings cost and gain.
+struct ContactTracking {
+  int corrector_steps = 1;  ///< contact::TrackerOptions::corrector_steps (0–3)
+  /// The tracker's point is the contact when the contact equations' scaled residual there is
+  /// below this (contact::ExtremumAt); else a full extremal solve runs. At 1e-12 one Newton step
+  /// from it would move it by ~1e-24. A larger value keeps the tracker's point as it stands: β
+  /// is then d·n at a point that is not quite extremal, an error second order in the residual.
+  double accept_residual = 1e-12;
+};
+
 /// The signed distance β between a surface f on body a and a surface g on body b at their
 /// extremal pair (seed 001 §3.3, design.md §4.1–4.2), one row: as an equality it is the
 /// "floating contact" β = 0 (the surfaces touch and may roll and slide), as an inequality
@@ -61,7 +74,9 @@ struct ContactSlotState : TermState {
 class SurfaceContactTerm final : public Term {
  public:
   struct State final : ContactSlotState {
-    State(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g) : tracker(f, g) {}
+    State(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
+          const contact::TrackerOptions& options)
+        : tracker(f, g, options) {}
     Eigen::Vector4d u;  ///< tracked (u, v, s, t)
     /// contact/'s tracker follows the pair between solves (predict with u_q, one correction);
     /// a full extremal solve from the last parameters runs when it is not tracking (start,
@@ -84,7 +99,8 @@ class SurfaceContactTerm final : public Term {
 
   /// The surfaces must outlive the term. `seed`: (u, v, s, t) near the extremum to follow.
   SurfaceContactTerm(int body_f, const nurbs::NurbsSurface* f, int body_g,
-                     const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed);
+                     const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed,
+                     const ContactTracking& tracking = {});
 
   std::string name() const override { return "surface_contact"; }
   int dim() const override { return 1; }
@@ -99,8 +115,7 @@ class SurfaceContactTerm final : public Term {
                           TermHessian* h) const override;
 
   std::unique_ptr<TermState> MakeState() const override;
-  /// The tracker's corrected point is taken when the contact equations' scaled residual there
-  /// is below this (contact::ExtremumAt): one Newton step from it would move it by ~1e-24.
+  /// The default ContactTracking::accept_residual.
   static constexpr double kTrackedResidual = 1e-12;
 
  private:
@@ -114,6 +129,7 @@ class SurfaceContactTerm final : public Term {
   const nurbs::NurbsSurface* f_;
   const nurbs::NurbsSurface* g_;
   Eigen::Vector4d seed_;
+  ContactTracking tracking_;
 };
 
 /// The signed distance from a point on body a (attachment point) to a surface on body b at the
@@ -164,7 +180,8 @@ void Split(const Eigen::Matrix<double, 14, 14>& H, double w, TermHessian* h);
 
 std::shared_ptr<SurfaceContactTerm> MakeSurfaceContact(int body_f, const nurbs::NurbsSurface* f,
                                                        int body_g, const nurbs::NurbsSurface* g,
-                                                       const Eigen::Vector4d& seed);
+                                                       const Eigen::Vector4d& seed,
+                                                       const ContactTracking& tracking = {});
 std::shared_ptr<PointOnSurfaceTerm> MakePointOnSurface(const Attachment& point, int body_s,
                                                        const nurbs::NurbsSurface* surface,
                                                        const Eigen::Vector2d& seed);

@@ -136,8 +136,13 @@ void TrimConstraintTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
 
 TrimmedContactTerm::TrimmedContactTerm(int body_a, const nurbs::NurbsSurface* f,
                                        const nurbs::TrimmedDomain* trim, int body_b,
-                                       const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed)
-    : body_a_(body_a), body_b_(body_b), g_(g), face_(body_a, f, body_b, g, seed), edges_(f, trim) {}
+                                       const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed,
+                                       const ContactTracking& tracking)
+    : body_a_(body_a),
+      body_b_(body_b),
+      g_(g),
+      face_(body_a, f, body_b, g, seed, tracking),
+      edges_(f, trim) {}
 
 std::unique_ptr<TermState> TrimmedContactTerm::MakeState() const {
   auto st = std::make_unique<State>();

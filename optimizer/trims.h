@@ -122,7 +122,8 @@ class TrimmedContactTerm final : public Term {
   };
   /// The surfaces and the trim must outlive the term.
   TrimmedContactTerm(int body_a, const nurbs::NurbsSurface* f, const nurbs::TrimmedDomain* trim,
-                     int body_b, const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed);
+                     int body_b, const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed,
+                     const ContactTracking& tracking = {});
 
   std::string name() const override { return "trimmed_contact"; }
   int dim() const override { return 1; }

@@ -115,7 +115,8 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
                            " mm apart at the initial poses (at most 5 mm)");
         }
       }
-      auto term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface, seed);
+      auto term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface, seed,
+                                                options.tracking);
       p.AddEquality(term);
       slots_.push_back({lo, hi, -1, true, false, term});
       continue;
@@ -126,14 +127,15 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
       Slot slot{lo, hi, 0, false, false, nullptr};
       const Eigen::Vector4d seed = Eigen::Vector4d::Constant(0.5);
       if (f.trim) {
-        slot.term = std::make_shared<optimizer::TrimmedContactTerm>(f.body, &f.surface, &*f.trim,
-                                                                    g.body, &g.surface, seed);
+        slot.term = std::make_shared<optimizer::TrimmedContactTerm>(
+            f.body, &f.surface, &*f.trim, g.body, &g.surface, seed, options.tracking);
       } else if (g.trim) {
         slot.swapped = true;
-        slot.term = std::make_shared<optimizer::TrimmedContactTerm>(g.body, &g.surface, &*g.trim,
-                                                                    f.body, &f.surface, seed);
+        slot.term = std::make_shared<optimizer::TrimmedContactTerm>(
+            g.body, &g.surface, &*g.trim, f.body, &f.surface, seed, options.tracking);
       } else {
-        slot.term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface, seed);
+        slot.term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface, seed,
+                                                  options.tracking);
       }
       const int index = p.AddInequality(slot.term);  // deactivated below, once solver_ has data
       slot.row = p.inequalities()[static_cast<size_t>(index)].row;

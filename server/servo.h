@@ -41,6 +41,9 @@ struct ServoOptions {
   /// bounds the coupling's spring term (k · 0.2 m ≈ 60 N at 300 N/m) and a 10 cm jump's damping
   /// term is ≈ 100 N, so only a broken state reaches a thousand times 3.3 N.
   double fault_force_factor = 1e3;
+  /// How contact slots follow their pairs between solves (defaults exact; bench/speed_error
+  /// sweeps the alternatives, docs/benchmarks.md).
+  optimizer::ContactTracking tracking;
 };
 
 /// Test hooks: a one-shot value injected into one stage of the next tick, to show that a

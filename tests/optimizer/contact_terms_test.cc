@@ -250,6 +250,65 @@ TEST(ContactTermsTest, BadInputIsRejectedWithAMessage) {
   } catch (const std::invalid_argument& e) {
     EXPECT_STREQ(e.what(), "point on surface: non-finite seed");
   }
+  for (int steps : {-1, 4}) {
+    try {
+      MakeSurfaceContact(s.a, &s.sphere, s.b, &s.patch, {0.5, 0.5, 0.5, 0.5},
+                         ContactTracking{steps, 1e-12});
+      ADD_FAILURE();
+    } catch (const std::invalid_argument& e) {
+      EXPECT_STREQ(e.what(), "surface contact: corrector_steps must be 0 to 3");
+    }
+  }
+  for (double accept : {1e-13, std::nan("")}) {
+    try {
+      MakeSurfaceContact(s.a, &s.sphere, s.b, &s.patch, {0.5, 0.5, 0.5, 0.5},
+                         ContactTracking{1, accept});
+      ADD_FAILURE();
+    } catch (const std::invalid_argument& e) {
+      EXPECT_STREQ(e.what(), "surface contact: accept_residual must be at least 1e-12");
+    }
+  }
+}
+
+// The tracking settings bench/speed_error sweeps: the default is exact (β a full solve's to
+// 1e-14 at every step); with the tracker's point accepted as it stands and no corrector, β is
+// the first-order prediction's, off by about the predictor's residual, and no full solve runs.
+TEST(ContactTermsTest, LooserTrackingTradesExactnessForSolves) {
+  Scene s;
+  std::mt19937_64 rng(44);
+  const Eigen::VectorXd q0 = NearContact(s, 0.004, rng);
+  std::vector<BodyPose> poses;
+  s.mech.Poses(q0, &poses);
+  const Eigen::Vector4d seed = contact::ClosestSamplePair(
+      s.sphere, poses[static_cast<size_t>(s.a)], s.patch, poses[static_cast<size_t>(s.b)], 23);
+  double worst[2] = {0, 0};
+  int64_t solves[2] = {0, 0};
+  const ContactTracking settings[2] = {ContactTracking{}, ContactTracking{0, 1e-3}};
+  for (int m = 0; m < 2; ++m) {
+    const auto term = MakeSurfaceContact(s.a, &s.sphere, s.b, &s.patch, seed, settings[m]);
+    const std::unique_ptr<TermState> st_ptr = term->MakeState();
+    auto& st = static_cast<SurfaceContactTerm::State&>(*st_ptr);
+    Eigen::VectorXd q = q0;
+    Value(s.mech, *term, &st, q, nullptr);
+    for (int k = 0; k < 50; ++k) {
+      q[0] += 1e-4;
+      q[11] += 5e-4;
+      const double beta = Value(s.mech, *term, &st, q, nullptr);
+      s.mech.Poses(q, &poses);
+      const contact::SurfaceSurfaceExtremum full =
+          contact::SolveSurfaceSurface(s.sphere, poses[static_cast<size_t>(s.a)], s.patch,
+                                       poses[static_cast<size_t>(s.b)], st.extremum().u);
+      worst[m] = std::max(worst[m], std::abs(beta - full.beta));
+    }
+    solves[m] = st.solves;
+  }
+  std::printf("beta error: exact %.1e (%lld solves), tracked without corrector %.1e (%lld)\n",
+              worst[0], static_cast<long long>(solves[0]), worst[1],
+              static_cast<long long>(solves[1]));
+  EXPECT_LT(worst[0], 1e-14);
+  EXPECT_GT(worst[1], 1e-12);  // the prediction's error shows
+  EXPECT_LT(worst[1], 1e-6);   // and stays second order in a 0.1 mm step
+  EXPECT_LE(solves[1], solves[0]);
 }
 
 }  // namespace
