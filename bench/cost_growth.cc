@@ -145,6 +145,11 @@ int main(int argc, char** argv) {
         "fits: mean tick ~ bodies^%.2f, ~ active contacts^%.2f; global pass ~ bodies^%.2f; "
         "mean tick = %.2f us + %.2f us per active contact\n",
         Fit(lb, lt).first, Fit(lc, lt).first, Fit(lb, lp).first, base, per_contact);
+    const double exponent = Fit(lc, lt).first;
+    std::printf(
+        "growth of the mean tick in active contacts: exponent %.2f (target <= 1, at most "
+        "linear: %s)\n",
+        exponent, exponent <= 1.0 ? "met" : "NOT MET");
   }
   if (!csv.empty()) {
     std::ofstream out(csv);
