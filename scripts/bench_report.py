@@ -222,10 +222,30 @@ def main():
         parts.append(f"**{title}** (`build/bench/{name}`)\n")
         parts.append(block(after_table(text) if text else "(not built: Open CASCADE missing)"))
 
-    parts.append("## Not in this report yet\n")
-    parts.append(
-        "- FCL's distance query between the certified tessellations against the tracked contact, "
-        "and a callgrind instruction count per servo tick (issue 18 item 4).\n")
+    parts.append("**What exactness buys: FCL's distance between certified meshes against the "
+                 "tracked contact** (`build/bench/mesh_peer`, the same pair and poses)\n")
+    text = read(a.runs, "mesh_peer.txt") or "(not run)"
+    lines = text.splitlines()
+    parts.append(block(lines[0]) if lines else "")
+    parts.append("\n".join(line for line in lines if line.startswith("|")) + "\n")
+
+    parts.append("## Instructions per servo tick\n")
+    out = read(a.runs, "callgrind.out")
+    ticks = read(a.runs, "callgrind_ticks.txt")
+    total = None
+    for line in (out or "").splitlines():
+        m = re.match(r"^(?:totals|summary):\s*(\d+)", line)
+        if m:
+            total = int(m.group(1))
+    if total and ticks:
+        n = int(ticks)
+        parts.append(
+            f"callgrind over `build/bench/servo_profile` (the paperclip drag on one thread), "
+            f"counting only `ServoLoop::Tick` and what it calls: **{total / n:,.0f} instructions "
+            f"per tick** (mean over {n} ticks, {total:,} in all). Unlike the times above this "
+            "does not depend on the machine's load, so reports from different days compare.\n")
+    else:
+        MISSING.append("callgrind totals")
     with open(a.out, "w") as f:
         f.write("\n".join(parts))
     if MISSING:

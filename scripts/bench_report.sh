@@ -41,11 +41,12 @@ step() { echo "bench_report: $1 ($(( $(date +%s) - start )) s)" >&2; }
 
 if [ "$quick" = 1 ]; then
   se_args=(--quick --seconds 0.1); cg_args=(--steps 100 --chains 1,2); mc_args=(--steps 200)
-  pb_args=(--steps 200); sr_seconds=2; st_seconds=0.1; gb_args=(--benchmark_min_time=0.0005 --benchmark_color=false)
+  pb_args=(--steps 200); sr_seconds=2; st_seconds=0.1; mp_args=(--poses 50 --tolerances 1e-3,1e-4)
+  cg_steps=50; gb_args=(--benchmark_min_time=0.0005 --benchmark_color=false)
   ob_args=(--steps=20 --benchmark_min_time=0.0005 --benchmark_color=false)
 else
   se_args=(--seconds 2); cg_args=(--steps 3000); mc_args=(); pb_args=(--steps 20000)
-  sr_seconds=30; st_seconds=4; gb_args=(--benchmark_color=false); ob_args=(--benchmark_color=false)
+  sr_seconds=30; st_seconds=4; mp_args=(); cg_steps=3000; gb_args=(--benchmark_color=false); ob_args=(--benchmark_color=false)
 fi
 
 step "speed against error"
@@ -71,6 +72,14 @@ for peer in nurbs_eval_bench contact_bench optimizer_bench; do
       echo "bench_report: $peer failed (see $runs/$peer.err)" >&2; exit 1; }
   fi
 done
+step "FCL on meshes against the tracked contact"
+"$bench/mesh_peer" "${mp_args[@]}" > "$runs/mesh_peer.txt"
+step "instructions per servo tick (callgrind)"
+# Only the ticks are counted (ServoLoop::Tick and what it calls): four per device state.
+valgrind --tool=callgrind --callgrind-out-file="$runs/callgrind.out" \
+  --toggle-collect='tangent::server::ServoLoop::Tick*' \
+  "$bench/servo_profile" --steps "$cg_steps" > "$runs/callgrind_profile.txt" 2> "$runs/callgrind.err"
+echo "$(( 4 * cg_steps ))" > "$runs/callgrind_ticks.txt"
 step "plots and report"
 /usr/bin/python3 scripts/plot_speed_error.py "$runs/speed_error.csv" "$img/speed_error.png"
 /usr/bin/python3 scripts/plot_cost_growth.py "$runs/cost_growth.csv" "$img/cost_growth.png"

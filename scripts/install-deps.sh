@@ -28,6 +28,8 @@ packages=(
   libopenmpi-dev openmpi-bin python3-matplotlib
   # Fuzzing (scripts/fuzz.sh): clang with its libFuzzer and sanitizer runtimes.
   clang libclang-rt-14-dev
+  # Instructions per servo tick, independent of the machine's load (scripts/bench_report.sh).
+  valgrind
 )
 
 missing=()
