@@ -158,10 +158,13 @@ def main():
     ap.add_argument("--img", default="img")
     ap.add_argument("--elapsed", type=int, default=0)
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--commit", default="", help="the commit the programs were built from")
     a = ap.parse_args()
-    commit = sh("git", "rev-parse", "--short=12", "HEAD") or "unknown"
-    if sh("git", "status", "--porcelain", "--untracked-files=no"):
-        commit += " (with uncommitted changes)"
+    commit = a.commit
+    if not commit:
+        commit = sh("git", "rev-parse", "--short=12", "HEAD") or "unknown"
+        if sh("git", "status", "--porcelain", "--untracked-files=no"):
+            commit += " (with uncommitted changes)"
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     parts = ["# Benchmarks\n"]
     parts.append(

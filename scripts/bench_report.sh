@@ -23,6 +23,11 @@ while [ $# -gt 0 ]; do
   shift
 done
 build_dir=${TANGENT_BUILD_DIR:-build}
+# The commit the programs are built from (and whether the tree differed from it), taken now.
+commit_state="$(git rev-parse --short=12 HEAD 2>/dev/null || echo unknown)"
+if [ -n "$(git status --porcelain --untracked-files=no 2>/dev/null)" ]; then
+  commit_state+=" (with uncommitted changes)"
+fi
 if [ "$build" = 1 ]; then bash scripts/build.sh > /dev/null; fi
 bench="$build_dir/bench"
 if [ -z "$out" ]; then
@@ -84,5 +89,5 @@ step "plots and report"
 /usr/bin/python3 scripts/plot_speed_error.py "$runs/speed_error.csv" "$img/speed_error.png"
 /usr/bin/python3 scripts/plot_cost_growth.py "$runs/cost_growth.csv" "$img/cost_growth.png"
 /usr/bin/python3 scripts/bench_report.py "$runs" "$report" --img "$(realpath --relative-to="$(dirname "$report")" "$img")" \
-  --elapsed "$(( $(date +%s) - start ))" $([ "$quick" = 1 ] && echo --quick)
+  --elapsed "$(( $(date +%s) - start ))" --commit "$commit_state" $([ "$quick" = 1 ] && echo --quick)
 step "done: $report"
