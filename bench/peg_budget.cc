@@ -7,6 +7,7 @@
 // p99.9 of each and the peg's p99 as a ratio of the paperclips'.
 //
 //   ./build/bench/peg_budget [--steps 20000]   (device states; 20 s of both paths)
+//                            [--only peg|paperclips]  (one scene: for profilers such as callgrind)
 
 #include <chrono>
 #include <cstdio>
@@ -62,8 +63,10 @@ struct Run {
 
 int main(int argc, char** argv) {
   int steps = 20000;
+  std::string only;  // "", "peg" or "paperclips"
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--steps")) steps = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--only")) only = argv[i + 1];
   }
   std::ifstream f(std::string(TANGENT_SCENES_DIR) + "/peg_in_hole.path.csv");
   std::stringstream text;
@@ -78,7 +81,11 @@ int main(int argc, char** argv) {
     const Eigen::Vector3d p = peg_path.At(t);
     for (int i = 0; i < 3; ++i) b.position[i] = p[i];
     const bool pass = k % 4 == 3;
-    if (k % 2 == 0) {
+    if (only == "peg") {
+      peg.Step(b, now, pass);
+    } else if (only == "paperclips") {
+      clips.Step(a, now, pass);
+    } else if (k % 2 == 0) {
       clips.Step(a, now, pass);
       peg.Step(b, now, pass);
     } else {
@@ -92,6 +99,11 @@ int main(int argc, char** argv) {
                 name, Quantile(r.tick_us, 0.5), Quantile(r.tick_us, 0.99),
                 Quantile(r.tick_us, 0.999), r.max_violation);
   };
+  if (!only.empty()) {
+    std::printf("peg_budget: %d device states, 4 ticks each, %s only\n", steps, only.c_str());
+    line(only.c_str(), only == "peg" ? peg : clips);
+    return 0;
+  }
   std::printf("peg_budget: %d device states, 4 ticks each, both scenes in lockstep on one thread\n",
               steps);
   line("paperclips", clips);

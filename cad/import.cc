@@ -6,6 +6,7 @@
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepBuilderAPI_NurbsConvert.hxx>
 #include <BRepTools.hxx>
+#include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <Geom2dConvert.hxx>
 #include <Geom2d_BSplineCurve.hxx>
@@ -15,30 +16,53 @@
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_Surface.hxx>
 #include <IFSelect_ReturnStatus.hxx>
-#include <IGESControl_Reader.hxx>
+#include <IGESCAFControl_Reader.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <Message_Printer.hxx>
-#include <STEPControl_Reader.hxx>
+#include <Quantity_Color.hxx>
+#include <STEPCAFControl_Reader.hxx>
+#include <ShapeBuild_ReShape.hxx>
 #include <ShapeFix_Face.hxx>
 #include <ShapeFix_Shape.hxx>
 #include <Standard_Failure.hxx>
 #include <TColStd_Array1OfReal.hxx>
 #include <TColgp_Array2OfPnt.hxx>
+#include <TCollection_AsciiString.hxx>
+#include <TDF_LabelSequence.hxx>
+#include <TDataStd_Name.hxx>
+#include <TDocStd_Document.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Wire.hxx>
+#include <XCAFApp_Application.hxx>
+#include <XCAFDoc_ColorTool.hxx>
+#include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_ShapeTool.hxx>
+
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
+
+#include <nlohmann/json.hpp>
+
+#include "nurbs/json_io.h"
 
 namespace tangent::cad {
 
@@ -154,7 +178,41 @@ double CloseLoop(std::vector<nurbs::NurbsCurve2d>* curves) {
   return largest;
 }
 
-TopoDS_Shape Read(const std::string& path) {
+// A file read into an XCAF document: the shape (its free shapes together), and the document's
+// names and colours for its solids and faces.
+struct ReadPart {
+  TopoDS_Shape shape;
+  Handle(TDocStd_Document) doc;
+  Handle(XCAFDoc_ShapeTool) shapes;
+  Handle(XCAFDoc_ColorTool) colours;
+
+  /// The name the file gives `s` (its own label's, else its instance's referred shape's): empty
+  /// when it has none.
+  std::string NameOf(const TopoDS_Shape& s) const {
+    TDF_Label label;
+    if (shapes.IsNull() || !shapes->Search(s, label, true, true, true)) return "";
+    Handle(TDataStd_Name) name;
+    TDF_Label referred;
+    if (!label.FindAttribute(TDataStd_Name::GetID(), name) &&
+        XCAFDoc_ShapeTool::GetReferredShape(label, referred)) {
+      referred.FindAttribute(TDataStd_Name::GetID(), name);
+    }
+    return name.IsNull() ? "" : TCollection_AsciiString(name->Get()).ToCString();
+  }
+  /// The surface colour the file gives `s` (sRGB, 0..1), else its generic colour.
+  std::optional<std::array<double, 3>> ColourOf(const TopoDS_Shape& s) const {
+    Quantity_Color c;
+    if (colours.IsNull() || !(colours->GetColor(s, XCAFDoc_ColorSurf, c) ||
+                              colours->GetColor(s, XCAFDoc_ColorGen, c))) {
+      return std::nullopt;
+    }
+    std::array<double, 3> rgb{};
+    c.Values(rgb[0], rgb[1], rgb[2], Quantity_TOC_sRGB);
+    return rgb;
+  }
+};
+
+ReadPart Read(const std::string& path) {
   if (!std::filesystem::exists(path)) throw ImportError(path + ": no such file");
   {
     std::ifstream in(path);
@@ -163,6 +221,11 @@ TopoDS_Shape Read(const std::string& path) {
       throw ImportError(path + ": the file is empty");
   }
   const std::string ext = Lower(std::filesystem::path(path).extension().string());
+  const bool step = ext == ".step" || ext == ".stp", iges = ext == ".igs" || ext == ".iges";
+  if (!step && !iges) {
+    throw ImportError(path + ": unknown extension \"" + ext +
+                      "\" (STEP: .step, .stp; IGES: .igs, .iges)");
+  }
   // Open CASCADE's readers print to stdout through its default messenger: errors only.
   for (const Handle(Message_Printer) & printer : Message::DefaultMessenger()->Printers()) {
     printer->SetTraceLevel(Message_Fail);
@@ -174,24 +237,43 @@ TopoDS_Shape Read(const std::string& path) {
     Unit() { Interface_Static::SetCVal("xstep.cascade.unit", "M"); }
     ~Unit() { Interface_Static::SetCVal("xstep.cascade.unit", saved.c_str()); }
   } metres;
-  if (ext == ".step" || ext == ".stp") {
-    STEPControl_Reader reader;
-    if (reader.ReadFile(path.c_str()) != IFSelect_RetDone) {
-      throw ImportError(path + ": not a readable STEP file");
-    }
-    if (reader.TransferRoots() == 0) throw ImportError(path + ": the STEP file holds no shape");
-    return reader.OneShape();
+  // Through XCAF (the readers' document mode) so that the file's names and colours come along.
+  ReadPart part;
+  XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", part.doc);
+  const char* format = step ? "STEP" : "IGES";
+  bool read = false, transferred = false;
+  if (step) {
+    STEPCAFControl_Reader reader;
+    reader.SetNameMode(true);
+    reader.SetColorMode(true);
+    read = reader.ReadFile(path.c_str()) == IFSelect_RetDone;
+    transferred = read && reader.Transfer(part.doc);
+  } else {
+    IGESCAFControl_Reader reader;
+    reader.SetNameMode(true);
+    reader.SetColorMode(true);
+    read = reader.ReadFile(path.c_str()) == IFSelect_RetDone;
+    transferred = read && reader.Transfer(part.doc);
   }
-  if (ext == ".igs" || ext == ".iges") {
-    IGESControl_Reader reader;
-    if (reader.ReadFile(path.c_str()) != IFSelect_RetDone) {
-      throw ImportError(path + ": not a readable IGES file");
-    }
-    if (reader.TransferRoots() == 0) throw ImportError(path + ": the IGES file holds no shape");
-    return reader.OneShape();
+  if (!read) throw ImportError(path + ": not a readable " + format + " file");
+  part.shapes = XCAFDoc_DocumentTool::ShapeTool(part.doc->Main());
+  part.colours = XCAFDoc_DocumentTool::ColorTool(part.doc->Main());
+  TDF_LabelSequence free;
+  part.shapes->GetFreeShapes(free);
+  if (!transferred || free.IsEmpty()) {
+    throw ImportError(path + ": the " + format + " file holds no shape");
   }
-  throw ImportError(path + ": unknown extension \"" + ext +
-                    "\" (STEP: .step, .stp; IGES: .igs, .iges)");
+  if (free.Length() == 1) {
+    part.shape = XCAFDoc_ShapeTool::GetShape(free.Value(1));
+  } else {
+    TopoDS_Compound all;
+    BRep_Builder builder;
+    builder.MakeCompound(all);
+    for (int i = 1; i <= free.Length(); ++i)
+      builder.Add(all, XCAFDoc_ShapeTool::GetShape(free.Value(i)));
+    part.shape = all;
+  }
+  return part;
 }
 
 // One face: converted, its loops, its deviation. @throws std::exception (the caller skips it).
@@ -211,7 +293,8 @@ ImportedFace ConvertFace(const TopoDS_Face& face, const std::string& name,
   if (bs.IsNull()) bs = GeomConvert::SurfaceToBSplineSurface(BRep_Tool::Surface(nf));
   if (bs->IsUPeriodic()) bs->SetUNotPeriodic();
   if (bs->IsVPeriodic()) bs->SetVNotPeriodic();
-  ImportedFace out{name, KindOf(face), ToSurface(bs, reversed), std::nullopt, 0.0, reversed};
+  ImportedFace out{name, KindOf(face), ToSurface(bs, reversed), std::nullopt, 0.0, reversed,
+                   "",   std::nullopt};
   const double u0 = out.surface.knots_u().domain_begin(), u1 = out.surface.knots_u().domain_end();
   const double v0 = out.surface.knots_v().domain_begin(), v1 = out.surface.knots_v().domain_end();
 
@@ -299,23 +382,113 @@ ImportedFace ConvertFace(const TopoDS_Face& face, const std::string& name,
   return out;
 }
 
-}  // namespace
+// The part as JSON (surfaces and trims in nurbs/json_io's forms, doubles round-tripped exactly),
+// for the isolated import's pipe.
+nlohmann::json ToJson(const ImportedPart& part, const ImportOptions& options) {
+  using nlohmann::json;
+  auto colour = [](const std::optional<std::array<double, 3>>& c) {
+    return c ? json(*c) : json(nullptr);
+  };
+  json bodies = json::array();
+  for (const ImportedBody& b : part.bodies) {
+    json faces = json::array();
+    for (const ImportedFace& f : b.faces) {
+      json face = {{"name", f.name},
+                   {"kind", f.kind},
+                   {"surface", nurbs::ToJson(f.surface)},
+                   {"deviation", f.deviation},
+                   {"reversed", f.reversed},
+                   {"label", f.label},
+                   {"colour", colour(f.colour)}};
+      if (f.trim) {
+        face["trim"] = nurbs::ToJson(*f.trim);
+        face["trim"]["band"] = options.trim_band;
+      }
+      faces.push_back(std::move(face));
+    }
+    bodies.push_back(
+        {{"name", b.name}, {"label", b.label}, {"colour", colour(b.colour)}, {"faces", faces}});
+  }
+  const ImportReport& r = part.report;
+  return {{"bodies", bodies},
+          {"report",
+           {{"faces_by_kind", r.faces_by_kind},
+            {"loops", r.loops},
+            {"faces", r.faces},
+            {"skipped", r.skipped},
+            {"largest_deviation", r.largest_deviation},
+            {"warnings", r.warnings}}}};
+}
 
-ImportedPart ImportCad(const std::string& path, const ImportOptions& options) {
+ImportedPart PartFromJson(const nlohmann::json& j, const std::string& path) {
+  auto colour = [](const nlohmann::json& c) -> std::optional<std::array<double, 3>> {
+    if (c.is_null()) return std::nullopt;
+    return c.get<std::array<double, 3>>();
+  };
   ImportedPart part;
   part.path = path;
+  for (const auto& jb : j.at("bodies")) {
+    ImportedBody b{jb.at("name"), jb.at("label"), colour(jb.at("colour")), {}};
+    for (const auto& jf : jb.at("faces")) {
+      ImportedFace f{
+          jf.at("name"),  jf.at("kind"),          nurbs::SurfaceFromJson(jf.at("surface")),
+          std::nullopt,   jf.at("deviation"),     jf.at("reversed"),
+          jf.at("label"), colour(jf.at("colour"))};
+      if (jf.contains("trim")) f.trim.emplace(nurbs::TrimFromJson(jf.at("trim"), f.surface));
+      b.faces.push_back(std::move(f));
+    }
+    part.bodies.push_back(std::move(b));
+  }
+  const auto& r = j.at("report");
+  part.report.faces_by_kind = r.at("faces_by_kind").get<std::vector<std::pair<std::string, int>>>();
+  part.report.loops = r.at("loops");
+  part.report.faces = r.at("faces");
+  part.report.skipped = r.at("skipped");
+  part.report.largest_deviation = r.at("largest_deviation");
+  part.report.warnings = r.at("warnings").get<std::vector<std::string>>();
+  return part;
+}
+
+ImportedPart ImportInProcess(const std::string& path, const ImportOptions& options) {
+  ImportedPart part;
+  part.path = path;
+  ReadPart read;
   TopoDS_Shape shape;
+  // The file's names and colours, found on the shapes as read (healing makes new ones): each
+  // solid's or shell's and each coloured face's, keyed by the shape healing made of it.
+  struct Found {
+    TopoDS_Shape healed;
+    std::string name;
+    std::optional<std::array<double, 3>> colour;
+  };
+  std::vector<Found> found;
   try {
-    shape = Read(path);
+    read = Read(path);
+    shape = read.shape;
+    std::vector<std::pair<TopoDS_Shape, Found>> before;
+    for (TopAbs_ShapeEnum kind : {TopAbs_SOLID, TopAbs_SHELL, TopAbs_FACE}) {
+      for (TopExp_Explorer x(shape, kind); x.More(); x.Next()) {
+        Found f{x.Current(), read.NameOf(x.Current()), read.ColourOf(x.Current())};
+        if (!f.name.empty() || f.colour) before.emplace_back(x.Current(), f);
+      }
+    }
     if (options.heal) {
       ShapeFix_Shape fix(shape);
       fix.Perform();
       shape = fix.Shape();
+      for (auto& [original, f] : before) f.healed = fix.Context()->Value(original);
     }
+    for (auto& [original, f] : before) found.push_back(f);
   } catch (const Standard_Failure& e) {
     throw ImportError(path + ": Open CASCADE could not read it: " + e.GetMessageString());
   }
   if (shape.IsNull()) throw ImportError(path + ": the file holds no shape");
+  auto lookup = [&found](const TopoDS_Shape& s) -> const Found* {
+    for (const Found& f : found) {
+      if (f.healed.IsSame(s)) return &f;
+    }
+    return nullptr;
+  };
   // Bodies: the solids, else the shells, else the free faces together.
   std::vector<std::pair<std::string, TopoDS_Shape>> bodies;
   for (TopAbs_ShapeEnum kind : {TopAbs_SOLID, TopAbs_SHELL}) {
@@ -329,13 +502,22 @@ ImportedPart ImportCad(const std::string& path, const ImportOptions& options) {
   if (bodies.empty()) bodies.emplace_back("faces", shape);
   std::map<std::string, int> kinds;
   for (const auto& [name, body] : bodies) {
-    ImportedBody b{name, {}};
+    ImportedBody b{name, "", std::nullopt, {}};
+    if (const Found* f = lookup(body)) {
+      b.label = f->name;
+      b.colour = f->colour;
+    }
     int k = 0;
     for (TopExp_Explorer x(body, TopAbs_FACE); x.More(); x.Next(), ++k) {
       const std::string face_name = name + " face " + std::to_string(k);
       try {
         ImportedFace f =
             ConvertFace(TopoDS::Face(x.Current()), face_name, options, &part.report.warnings);
+        if (const Found* info = lookup(x.Current())) {
+          f.label = info->name;
+          f.colour = info->colour;
+        }
+        if (!f.colour) f.colour = b.colour;  // a face takes its body's colour
         ++kinds[f.kind];
         part.report.loops += static_cast<int>(f.trim ? f.trim->loops().size() : 0);
         part.report.largest_deviation = std::max(part.report.largest_deviation, f.deviation);
@@ -360,6 +542,93 @@ ImportedPart ImportCad(const std::string& path, const ImportOptions& options) {
   return part;
 }
 
+}  // namespace
+
+ImportedPart ImportCad(const std::string& path, const ImportOptions& options) {
+  if (!options.isolate) return ImportInProcess(path, options);
+  int fds[2];
+  if (pipe(fds) != 0) throw ImportError(path + ": cannot import: pipe: " + std::strerror(errno));
+  const pid_t pid = fork();
+  if (pid < 0) {
+    close(fds[0]);
+    close(fds[1]);
+    throw ImportError(path + ": cannot import: fork: " + std::strerror(errno));
+  }
+  if (pid == 0) {
+    // The child: Open CASCADE reads and converts; the part (or the error) goes up the pipe as
+    // "ok\n<json>" or "error\n<message>". Only _exit: no atexit handlers of the parent's. A
+    // crash kills the child with its signal, whatever handlers the parent installed (a crash
+    // reporter, a sanitizer, libFuzzer's): the parent reports it.
+    for (int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) signal(sig, SIG_DFL);
+    close(fds[0]);
+    std::string out;
+    try {
+      out = "ok\n" + ToJson(ImportInProcess(path, options), options).dump();
+    } catch (const ImportError& e) {
+      out = std::string("error\n") + e.what();
+    } catch (const std::exception& e) {
+      out = "error\n" + path + ": " + e.what();
+    }
+    size_t done = 0;
+    while (done < out.size()) {
+      const ssize_t n = write(fds[1], out.data() + done, out.size() - done);
+      if (n <= 0) _exit(2);
+      done += static_cast<size_t>(n);
+    }
+    close(fds[1]);
+    _exit(0);
+  }
+  close(fds[1]);
+  std::string in;
+  char buffer[1 << 16];
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration<double>(std::max(0.0, options.timeout_seconds));
+  bool timed_out = false;
+  for (;;) {
+    const double left =
+        std::chrono::duration<double>(deadline - std::chrono::steady_clock::now()).count();
+    pollfd p{fds[0], POLLIN, 0};
+    const int ready = left > 0.0 ? poll(&p, 1, static_cast<int>(std::ceil(left * 1e3))) : 0;
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready == 0) {
+      timed_out = true;
+      break;
+    }
+    const ssize_t n = read(fds[0], buffer, sizeof buffer);
+    if (n > 0) {
+      in.append(buffer, static_cast<size_t>(n));
+    } else if (n == 0 || errno != EINTR) {
+      break;
+    }
+  }
+  close(fds[0]);
+  if (timed_out) kill(pid, SIGKILL);
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (timed_out) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%.3g", options.timeout_seconds);
+    throw ImportError(path + ": the import took longer than " + text +
+                      " s and was stopped (ImportOptions::timeout_seconds)");
+  }
+  if (WIFSIGNALED(status)) {
+    const int sig = WTERMSIG(status);
+    throw ImportError(path + ": Open CASCADE crashed reading it (signal " + std::to_string(sig) +
+                      ", " + strsignal(sig) + ")");
+  }
+  if (in.rfind("ok\n", 0) == 0) {
+    try {
+      return PartFromJson(nlohmann::json::parse(in.begin() + 3, in.end()), path);
+    } catch (const std::exception& e) {
+      throw ImportError(path + ": the import's result could not be read back: " + e.what());
+    }
+  }
+  if (in.rfind("error\n", 0) == 0) throw ImportError(in.substr(6));
+  throw ImportError(path + ": the import stopped without a result (exit status " +
+                    std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + ")");
+}
+
 std::vector<std::string> ReportLines(const ImportedPart& part) {
   std::vector<std::string> lines;
   char text[256];
@@ -375,12 +644,25 @@ std::vector<std::string> ReportLines(const ImportedPart& part) {
   std::snprintf(text, sizeof text, "largest deviation from Open CASCADE: %.3g m",
                 part.report.largest_deviation);
   lines.emplace_back(text);
+  auto describe = [](const std::string& label, const std::optional<std::array<double, 3>>& c) {
+    std::string out;
+    if (!label.empty()) out += " \"" + label + "\"";
+    if (c) {
+      char rgb[64];
+      std::snprintf(rgb, sizeof rgb, " colour (%.3f, %.3f, %.3f)", (*c)[0], (*c)[1], (*c)[2]);
+      out += rgb;
+    }
+    return out;
+  };
   for (const ImportedBody& b : part.bodies) {
+    const std::string about = describe(b.label, b.colour);
+    if (!about.empty()) lines.push_back("  " + b.name + ":" + about);
     for (const ImportedFace& f : b.faces) {
       std::snprintf(text, sizeof text, "  %s: %s%s, %zu loop(s), deviation %.3g m", f.name.c_str(),
                     f.kind.c_str(), f.reversed ? " (reversed)" : "",
                     f.trim ? f.trim->loops().size() : 0, f.deviation);
-      lines.emplace_back(text);
+      // A face's own label or colour (not the one it takes from its body).
+      lines.emplace_back(text + describe(f.label, f.colour == b.colour ? std::nullopt : f.colour));
     }
   }
   for (const std::string& w : part.report.warnings) lines.push_back("warning: " + w);

@@ -25,13 +25,20 @@ nlohmann::json SceneOf(const tangent::cad::ImportedPart& part) {
   scene["length_unit"] = "m";
   nlohmann::json bodies = nlohmann::json::array(), surfaces = nlohmann::json::array();
   for (const tangent::cad::ImportedBody& b : part.bodies) {
-    bodies.push_back({{"name", b.name}, {"mass", 0.1}});
+    nlohmann::json body = {{"name", b.name}, {"mass", 0.1}};
+    // The file's names and colours, kept for the reader and for viewers (the scene loader
+    // does not need them).
+    if (!b.label.empty()) body["label"] = b.label;
+    if (b.colour) body["colour"] = *b.colour;
+    bodies.push_back(body);
     for (const tangent::cad::ImportedFace& f : b.faces) {
       nlohmann::json s = {{"name", f.name},
                           {"body", b.name},
                           {"type", "nurbs"},
                           {"nurbs", tangent::nurbs::ToJson(f.surface)}};
       if (f.trim) s["trim"] = tangent::nurbs::ToJson(*f.trim);
+      if (!f.label.empty()) s["label"] = f.label;
+      if (f.colour) s["colour"] = *f.colour;
       surfaces.push_back(s);
     }
   }

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Fuzzes the scene parser, the NURBS JSON reader, the run-file parser and the server's
-# device-message path with libFuzzer (clang from Debian), AddressSanitizer and
+# Fuzzes the scene parser, the NURBS JSON reader, the run-file parser, the server's
+# device-message path and the CAD import (STEP/IGES through Open CASCADE) with libFuzzer (clang from Debian), AddressSanitizer and
 # UndefinedBehaviorSanitizer (docs/reliability.md "Fuzzing").
-#   bash scripts/fuzz.sh [--seconds N] [--seed S] [scene surface run device]
+#   bash scripts/fuzz.sh [--seconds N] [--seed S] [scene surface run device cad]
 # Builds build-fuzz/ (clang, the four fuzz targets and the libraries they need), seeds each
 # target's corpus (build-fuzz/corpus/<target>, kept between runs so coverage accumulates) from
 # scenes/, the seed writer and the kept findings (fuzz/regressions/<target>), then runs each
@@ -19,12 +19,12 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds=$2; shift 2 ;;
     --seed) seed_args=(-seed="$2"); shift 2 ;;  # libFuzzer's mutation seed (CI: fixed)
-    scene|surface|run|device) targets+=("$1"); shift ;;
-    *) echo "fuzz.sh: unknown argument '$1' (expected --seconds N, --seed S or scene|surface|run|device)" >&2
+    scene|surface|run|device|cad) targets+=("$1"); shift ;;
+    *) echo "fuzz.sh: unknown argument '$1' (expected --seconds N, --seed S or scene|surface|run|device|cad)" >&2
        exit 2 ;;
   esac
 done
-[ ${#targets[@]} -gt 0 ] || targets=(scene surface run device)
+[ ${#targets[@]} -gt 0 ] || targets=(scene surface run device cad)
 
 bash scripts/install-deps.sh
 # -O2 with line tables: Eigen-heavy code (the solver on the device path) runs some 10x slower at
@@ -33,21 +33,29 @@ flags="-O2 -gline-tables-only -fno-omit-frame-pointer -fsanitize=fuzzer-no-link,
 flags+=" -fno-sanitize-recover=undefined"
 mkdir -p build-fuzz
 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=Fuzz -DCMAKE_CXX_COMPILER=clang++ \
-  -DTANGENT_FUZZ=ON -DTANGENT_BUILD_TESTS=OFF -DTANGENT_BUILD_BENCH=OFF -DTANGENT_WITH_OCCT=OFF \
+  -DTANGENT_FUZZ=ON -DTANGENT_BUILD_TESTS=OFF -DTANGENT_BUILD_BENCH=OFF -DTANGENT_WITH_OCCT=ON \
   -DTANGENT_WITH_MPI=OFF "-DCMAKE_CXX_FLAGS=$flags" \
   "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined" > build-fuzz/configure.log 2>&1 ||
   { cat build-fuzz/configure.log; exit 1; }
-cmake --build build-fuzz --parallel "$(nproc)" --target tangent-fuzz-seeds \
+seeders=(tangent-fuzz-seeds)
+[[ " ${targets[*]} " == *" cad "* ]] && seeders+=(tangent-cad-seeds)
+cmake --build build-fuzz --parallel "$(nproc)" --target "${seeders[@]}" \
   "${targets[@]/%/_fuzzer}"
 
+# Open CASCADE's one-time allocations (static registries, never freed by design) are not ours.
+export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp"
 cd build-fuzz
 mkdir -p seeds/surface seeds/device
 ./fuzz/tangent-fuzz-seeds surface seeds/surface
 ./fuzz/tangent-fuzz-seeds device seeds/device
+if [ -x fuzz/tangent-cad-seeds ] && [[ " ${targets[*]} " == *" cad "* ]]; then
+  ./fuzz/tangent-cad-seeds seeds/cad > /dev/null
+fi
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # Inputs up to the largest example (scenes, run files) or a few hundred ticks (device scripts).
-max_len() { if [ "$1" = device ]; then echo 4096; else echo 65536; fi; }
+# CAD files: the seeds are 10–40 kB.
+max_len() { case "$1" in device) echo 4096 ;; cad) echo 131072 ;; *) echo 65536 ;; esac; }
 failed=()
 for t in "${targets[@]}"; do
   corpus=corpus/$t
@@ -57,6 +65,7 @@ for t in "${targets[@]}"; do
     run) cp -n ../scenes/*.run.json "$corpus" ;;
     surface) cp -n seeds/surface/* "$corpus" ;;
     device) cp -n seeds/device/* "$corpus" ;;
+    cad) cp -n seeds/cad/* "$corpus" ;;
   esac
   find "../fuzz/regressions/$t" -type f ! -name .keep -exec cp -n {} "$corpus" \;
   echo "fuzz.sh: $t for ${seconds} s ($(find "$corpus" -type f | wc -l) inputs in the corpus)"

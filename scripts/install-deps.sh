@@ -21,8 +21,9 @@ packages=(
   # Peers for cross-checks and benchmarks: Open CASCADE, IPOPT, NLopt.
   # (OCCT's CMake config links libtbb.so, which only libtbb-dev provides.)
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev libtbb-dev
-  # CAD import (tangent-import, cad/): Open CASCADE's STEP and IGES readers.
-  libocct-data-exchange-dev
+  # CAD import (tangent-import, cad/): Open CASCADE's STEP and IGES readers, through XCAF
+  # documents (OCAF) for the files' names and colours.
+  libocct-data-exchange-dev libocct-ocaf-dev
   coinor-libipopt-dev libnlopt-cxx-dev
   # Offline design runs across processes and machines (tangent-opt under mpirun), and their plots.
   libopenmpi-dev openmpi-bin python3-matplotlib

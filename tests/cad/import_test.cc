@@ -23,10 +23,13 @@
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
 #include <Geom_BSplineSurface.hxx>
+#include <IGESCAFControl_Writer.hxx>
 #include <IGESControl_Controller.hxx>
 #include <IGESControl_Reader.hxx>
 #include <IGESControl_Writer.hxx>
 #include <Interface_Static.hxx>
+#include <Quantity_Color.hxx>
+#include <STEPCAFControl_Writer.hxx>
 #include <STEPControl_Reader.hxx>
 #include <STEPControl_Writer.hxx>
 #include <ShapeFix_Face.hxx>
@@ -34,11 +37,17 @@
 #include <TColStd_Array1OfInteger.hxx>
 #include <TColStd_Array1OfReal.hxx>
 #include <TColgp_Array2OfPnt.hxx>
+#include <TDataStd_Name.hxx>
+#include <TDocStd_Document.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
+#include <XCAFApp_Application.hxx>
+#include <XCAFDoc_ColorTool.hxx>
+#include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_ShapeTool.hxx>
 #include <gp_Ax1.hxx>
 #include <gp_Ax2.hxx>
 #include <gp_Pnt2d.hxx>
@@ -380,6 +389,100 @@ TEST(ImportTest, TangentImportWritesASceneThatLoadsWithItsTrims) {
 
 namespace tangent::cad {
 namespace {
+
+// Names and colours (XCAF): a part named "bracket" coloured blue with one face red, written by
+// Open CASCADE's XCAF writers to STEP and IGES, comes back with its label and colours on the
+// body and on its faces (the red face its own, the others the body's); the bodies keep their
+// stable names ("solid 0"), and tangent-import writes labels and colours into the scene.
+TEST(ImportTest, NamesAndColoursComeFromTheFile) {
+  const TopoDS_Shape box = FilletedBox();
+  TopoDS_Face red_face;
+  for (TopExp_Explorer x(box, TopAbs_FACE); x.More(); x.Next()) {
+    red_face = TopoDS::Face(x.Current());
+    break;
+  }
+  for (bool step : {true, false}) {
+    SCOPED_TRACE(step ? "STEP" : "IGES");
+    Handle(TDocStd_Document) doc;
+    XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc);
+    Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
+    Handle(XCAFDoc_ColorTool) colours = XCAFDoc_DocumentTool::ColorTool(doc->Main());
+    const TDF_Label part = shapes->AddShape(box, false);
+    TDataStd_Name::Set(part, "bracket");
+    colours->SetColor(part, Quantity_Color(0.0, 0.0, 1.0, Quantity_TOC_sRGB), XCAFDoc_ColorSurf);
+    const TDF_Label face = shapes->AddSubShape(part, red_face);
+    ASSERT_FALSE(face.IsNull());
+    colours->SetColor(face, Quantity_Color(1.0, 0.0, 0.0, Quantity_TOC_sRGB), XCAFDoc_ColorSurf);
+    const std::string path = Dir() + (step ? "/named_bracket.step" : "/named_bracket.igs");
+    Interface_Static::SetCVal("xstep.cascade.unit", "MM");
+    if (step) {
+      STEPCAFControl_Writer w;
+      Interface_Static::SetCVal("write.step.unit", "MM");
+      ASSERT_TRUE(w.Transfer(doc, STEPControl_AsIs));
+      ASSERT_EQ(w.Write(path.c_str()), IFSelect_RetDone);
+    } else {
+      IGESControl_Controller::Init();
+      Interface_Static::SetCVal("write.iges.unit", "MM");
+      Interface_Static::SetIVal("write.iges.brep.mode", 1);  // faces with their loops
+      IGESCAFControl_Writer w;
+      ASSERT_TRUE(w.Transfer(doc));
+      ASSERT_TRUE(w.Write(path.c_str()));
+    }
+    const ImportedPart imported = ImportCad(path);
+    ASSERT_EQ(imported.bodies.size(), 1u);
+    const ImportedBody& b = imported.bodies[0];
+    EXPECT_EQ(b.name, "solid 0");
+    if (step) {
+      EXPECT_EQ(b.label, "bracket");  // IGES 5.3 names entities, not solids
+    }
+    ASSERT_TRUE(b.colour.has_value());
+    EXPECT_NEAR((*b.colour)[0], 0.0, 1e-3);
+    EXPECT_NEAR((*b.colour)[2], 1.0, 1e-3);
+    int red = 0, blue = 0;
+    for (const ImportedFace& f : b.faces) {
+      ASSERT_TRUE(f.colour.has_value()) << f.name;
+      red += (*f.colour)[0] > 0.99 && (*f.colour)[2] < 0.01;
+      blue += (*f.colour)[2] > 0.99 && (*f.colour)[0] < 0.01;
+    }
+    EXPECT_EQ(red, 1);
+    EXPECT_EQ(blue, static_cast<int>(b.faces.size()) - 1);
+    bool reported = false;
+    for (const std::string& line : ReportLines(imported))
+      reported = reported || line.find("colour (1.000, 0.000, 0.000)") != std::string::npos;
+    EXPECT_TRUE(reported);
+  }
+}
+
+// A file that crashes Open CASCADE's STEP reader (the import fuzzer's finding, kept in
+// fuzz/regressions/cad/: a face bound whose reference is the wrong entity, which the reader
+// dereferences as null in StepShape_FaceBound::Bound) is an ImportError naming the file and the
+// signal; the import ran in its own process, so this one goes on, and the next import works.
+TEST(ImportTest, AFileThatCrashesOpenCascadeIsAnImportError) {
+  std::ifstream in(std::string(TANGENT_FUZZ_REGRESSIONS) + "/cad/step_face_bound_null",
+                   std::ios::binary);
+  ASSERT_TRUE(in);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string path = Dir() + "/crashes_occt.step";
+  std::ofstream(path, std::ios::binary) << bytes.substr(1);  // the fuzzer's format byte off
+  try {
+    ImportCad(path);
+    ADD_FAILURE() << "imported";
+  } catch (const ImportError& e) {
+    EXPECT_THAT(e.what(),
+                HasSubstr("crashes_occt.step: Open CASCADE crashed reading it (signal 11"));
+  }
+  EXPECT_EQ(ImportCad(Write(FilletedBox(), "after_crash", true)).bodies.size(), 1u);
+  // An import that runs past its time is stopped and named (here: no time at all).
+  ImportOptions no_time;
+  no_time.timeout_seconds = 0.0;
+  try {
+    ImportCad(Write(FilletedBox(), "no_time", true), no_time);
+    ADD_FAILURE() << "imported";
+  } catch (const ImportError& e) {
+    EXPECT_THAT(e.what(),
+                HasSubstr("no_time.step: the import took longer than 0 s and was stopped"));
+  }
+}
 
 TEST(ImportTest, ASceneBodyTakesItsFacesFromACadFile) {
   const std::string part = Write(PlateWithHoles(), "scene_plate", true);
