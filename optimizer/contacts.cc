@@ -169,7 +169,7 @@ void SurfaceContactTerm::AddBoundaryHessian(const State& st, const BodyPose& pf,
       std::abs(st.ext.beta) > 1e-12 ? st.ext.beta : (st.ext.beta < 0.0 ? -1e-12 : 1e-12);
   const Eigen::Matrix<double, 3, 14> n_q =
       (Eigen::Matrix3d::Identity() - n * n.transpose()) * (P + J_u * u_q) / beta;
-  Matrix14 H = P.transpose() * n_q;
+  Matrix14 H = P.transpose().lazyProduct(n_q);  // (see AddWeightedHessian)
   Eigen::Matrix<double, 2, 14> V_f = Eigen::Matrix<double, 2, 14>::Zero(),
                                V_g = Eigen::Matrix<double, 2, 14>::Zero();
   V_f.block<1, 7>(0, 0) = n.transpose() * contact::DirectionJacobian(pf, st.eval.f.body.S_u);
@@ -209,7 +209,9 @@ void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
   n_q.rightCols<7>() = contact::DirectionJacobian(pg, pg.R_WB.transpose() * n);
   n_q += UnitNormalPartial(st->eval.g.N_W, st->eval.g.N_W_u) * u_q.row(2) +
          UnitNormalPartial(st->eval.g.N_W, st->eval.g.N_W_v) * u_q.row(3);
-  Matrix14 H = P.transpose() * n_q;
+  // Coefficient-based products (lazyProduct): at 14 x 3 x 14 Eigen would otherwise take its
+  // blocked GEMM path, whose packing costs more than the product (callgrind on the servo).
+  Matrix14 H = P.transpose().lazyProduct(n_q);
   // n·∂P/∂u u_q: the points' Jacobians change with the parameters.
   Eigen::Matrix<double, 2, 14> V_f = Eigen::Matrix<double, 2, 14>::Zero(),
                                V_g = Eigen::Matrix<double, 2, 14>::Zero();
@@ -217,7 +219,8 @@ void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
   V_f.block<1, 7>(1, 0) = n.transpose() * contact::DirectionJacobian(pf, st->eval.f.body.S_v);
   V_g.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(pg, st->eval.g.body.S_u);
   V_g.block<1, 7>(1, 7) = n.transpose() * contact::DirectionJacobian(pg, st->eval.g.body.S_v);
-  H.noalias() += V_f.transpose() * u_q.topRows<2>() - V_g.transpose() * u_q.bottomRows<2>();
+  H.noalias() += V_f.transpose().lazyProduct(u_q.topRows<2>());
+  H.noalias() -= V_g.transpose().lazyProduct(u_q.bottomRows<2>());
   Split(H, w[0], h);
   // n·∂²(f − g)/∂q² at fixed parameters: the rotations' curvature.
   h->W_a.noalias() += (w[0] * n) * st->eval.f.body.S.transpose();

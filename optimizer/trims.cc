@@ -249,13 +249,14 @@ void TrimmedContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
   n_q.rightCols<7>() = contact::DirectionJacobian(pb, pb.R_WB.transpose() * n);
   n_q += internal::UnitNormalPartial(e.f.N_W, e.f.N_W_u) * x_q.row(0) +
          internal::UnitNormalPartial(e.f.N_W, e.f.N_W_v) * x_q.row(1);
-  Eigen::Matrix<double, 14, 14> H = P.transpose() * n_q;
+  Eigen::Matrix<double, 14, 14> H = P.transpose().lazyProduct(n_q);  // (as contacts.cc)
   Eigen::Matrix<double, 1, 14> V_E = Eigen::Matrix<double, 1, 14>::Zero();
   Eigen::Matrix<double, 2, 14> V_G = Eigen::Matrix<double, 2, 14>::Zero();
   V_E.leftCols<7>() = n.transpose() * contact::DirectionJacobian(pa, e.g.body.C1);
   V_G.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(pb, e.f.body.S_u);
   V_G.block<1, 7>(1, 7) = n.transpose() * contact::DirectionJacobian(pb, e.f.body.S_v);
-  H.noalias() += V_E.transpose() * x_q.row(2) - V_G.transpose() * x_q.topRows<2>();
+  H.noalias() += V_E.transpose().lazyProduct(x_q.row(2));
+  H.noalias() -= V_G.transpose().lazyProduct(x_q.topRows<2>());
   internal::Split(H, w[0], h);
   h->W_a.noalias() += (w[0] * n) * e.g.body.C.transpose();
   h->W_b.noalias() -= (w[0] * n) * e.f.body.S.transpose();
