@@ -45,7 +45,7 @@ start=$(date +%s)
 step() { echo "bench_report: $1 ($(( $(date +%s) - start )) s)" >&2; }
 
 if [ "$quick" = 1 ]; then
-  se_args=(--quick --seconds 0.1); cg_args=(--steps 100 --chains 1,2); mc_args=(--steps 200)
+  se_args=(--quick --seconds 0.1); cg_args=(--steps 100 --chains 1,2 --extra 0,2); mc_args=(--steps 200)
   pb_args=(--steps 200); sr_seconds=2; st_seconds=0.1; mp_args=(--poses 50 --tolerances 1e-3,1e-4)
   cg_steps=50; gb_args=(--benchmark_min_time=0.0005 --benchmark_color=false)
   ob_args=(--steps=20 --benchmark_min_time=0.0005 --benchmark_color=false)
