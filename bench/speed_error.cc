@@ -116,6 +116,7 @@ struct Setting {
   int correctors = 1;
   bool exact = true;
   double rate = kDefaultRate;
+  bool operator==(const Setting&) const = default;
   bool is_default() const {
     return budget == 10 && correctors == 1 && exact && rate == kDefaultRate;
   }
@@ -391,7 +392,7 @@ int main(int argc, char** argv) {
         const Trace ref = Simulate(*scene, hand, ref_setting, seconds);
         for (const Setting& s : settings) {
           if (s.rate != rate) continue;
-          const bool is_ref = s.budget == kConverged && s.correctors == 1 && s.exact;
+          const bool is_ref = s == ref_setting;
           Row row = Compare(is_ref ? ref : Simulate(*scene, hand, s, seconds), ref, s);
           row.scene = name;
           row.hand = hand.name;
@@ -417,9 +418,7 @@ int main(int argc, char** argv) {
   std::vector<Pooled> pooled;
   for (const Row& r : rows) {
     auto it = std::find_if(pooled.begin(), pooled.end(), [&](const Pooled& p) {
-      return p.scene == r.scene && p.setting.budget == r.setting.budget &&
-             p.setting.correctors == r.setting.correctors && p.setting.exact == r.setting.exact &&
-             p.setting.rate == r.setting.rate;
+      return p.scene == r.scene && p.setting == r.setting;
     });
     if (it == pooled.end()) {
       Pooled p;
@@ -517,10 +516,7 @@ int main(int argc, char** argv) {
     for (const Row& r : rows) {
       bool front = false;
       for (const Pooled& p : pooled) {
-        if (p.scene == r.scene && p.setting.budget == r.setting.budget &&
-            p.setting.correctors == r.setting.correctors && p.setting.exact == r.setting.exact &&
-            p.setting.rate == r.setting.rate)
-          front = p.pareto;
+        if (p.scene == r.scene && p.setting == r.setting) front = p.pareto;
       }
       out << r.scene << ',' << r.hand << ',' << r.setting.rate << ','
           << budget_name(r.setting.budget) << ',' << r.setting.correctors << ','

@@ -49,14 +49,16 @@ TrackStatus ContactTracker::Step(const Vector7d& q_f, const Vector7d& q_g) {
       status_ = TrackStatus::kLost;
     return status_;
   }
+  // The corrector steps before the last need no u_q: only the last evaluation's is kept.
   for (int k = 1; k < options_.corrector_steps; ++k) {
-    const TrackStatus s = Evaluate(q_f, q_g, /*correct=*/true);
+    const TrackStatus s = Evaluate(q_f, q_g, /*correct=*/true, /*jacobian=*/false);
     if (s == TrackStatus::kLost || s == TrackStatus::kSingular) return s;
   }
   return Evaluate(q_f, q_g, /*correct=*/true);
 }
 
-TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, bool correct) {
+TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, bool correct,
+                                     bool jacobian) {
   q_f_ = q_f;
   q_g_ = q_g;
   bool clamped = false;
@@ -125,7 +127,7 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
     u_ += delta;
     u_ = internal::ClampOrWrap<4>(u_, lo_, hi_, periodic_);
   }
-  if (!ContactJacobianClosedForm(eval_, pf, pg, &u_q_)) {
+  if (jacobian && !ContactJacobianClosedForm(eval_, pf, pg, &u_q_)) {
     status_ = TrackStatus::kSingular;
     return status_;
   }

@@ -57,7 +57,9 @@ class ContactTracker {
   TrackStatus status() const { return status_; }
 
  private:
-  TrackStatus Evaluate(const Vector7d& q_f, const Vector7d& q_g, bool correct);
+  /// Evaluates at u_ (and corrects it when `correct`); `jacobian`: refresh u_q there.
+  TrackStatus Evaluate(const Vector7d& q_f, const Vector7d& q_g, bool correct,
+                       bool jacobian = true);
 
   const nurbs::NurbsSurface& f_;
   const nurbs::NurbsSurface& g_;

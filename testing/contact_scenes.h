@@ -4,6 +4,7 @@
 // place a pair separated, touching or interpenetrating along its extremal normal.
 
 #include <random>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -27,6 +28,18 @@ inline Eigen::Quaterniond RandomRotation(std::mt19937_64& rng) {
 inline Vector7d Transform(const Eigen::Isometry3d& x, const Vector7d& q) {
   const Eigen::Quaterniond rot(q[3], q[4], q[5], q[6]);
   return Coordinates(x * Eigen::Vector3d(q.head<3>()), Eigen::Quaterniond(x.rotation()) * rot);
+}
+
+/// The paraboloid z = k (x² + y²)/2 over [−a, a]², exact as a biquadratic Bézier patch (the
+/// blossom of x² gives control heights a², −a², a²). Radius of curvature at the vertex: 1/k;
+/// its focal point is at height 1/k (design.md §4.3's focal-point case).
+inline nurbs::NurbsSurface Paraboloid(double k, double a) {
+  const double xs[3] = {-a, 0, a}, x2[3] = {a * a, -a * a, a * a};
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) pts.emplace_back(xs[i], xs[j], 0.5 * k * (x2[i] + x2[j]));
+  return nurbs::NurbsSurface(nurbs::KnotVector(2, {0, 0, 0, 1, 1, 1}),
+                             nurbs::KnotVector(2, {0, 0, 0, 1, 1, 1}), pts);
 }
 
 /// A surface pair on two bodies.

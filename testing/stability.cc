@@ -46,6 +46,7 @@ using contact::BodyPose;
 using contact::ExtremalStatus;
 using contact::Vector7d;
 using contact::testing::Coordinates;
+using contact::testing::Paraboloid;
 
 const Vector7d kIdentity = Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity());
 
@@ -174,16 +175,6 @@ std::vector<StabilityRow> RunKinematic(const KinematicSpec& c) {
     rows.push_back(row);
   }
   return rows;
-}
-
-// The paraboloid z = k (x² + y²)/2 over [−a, a]², exact as a biquadratic Bézier patch.
-nurbs::NurbsSurface Paraboloid(double k, double a) {
-  const double xs[3] = {-a, 0, a}, x2[3] = {a * a, -a * a, a * a};
-  std::vector<Eigen::Vector3d> pts;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) pts.emplace_back(xs[i], xs[j], 0.5 * k * (x2[i] + x2[j]));
-  return nurbs::NurbsSurface(nurbs::KnotVector(2, {0, 0, 0, 1, 1, 1}),
-                             nurbs::KnotVector(2, {0, 0, 0, 1, 1, 1}), pts);
 }
 
 std::vector<KinematicSpec> KinematicSpecs() {

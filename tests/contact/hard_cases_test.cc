@@ -14,19 +14,9 @@ namespace tangent::contact {
 namespace {
 
 using testing::Coordinates;
+using testing::Paraboloid;
 
 const Vector7d kIdentity = Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity());
-
-// The paraboloid z = k (x² + y²)/2 over [−a, a]², exact as a biquadratic Bezier patch (the
-// blossom of x² gives control heights a², −a², a²). Radius of curvature at the vertex: 1/k.
-nurbs::NurbsSurface Paraboloid(double k, double a) {
-  const double xs[3] = {-a, 0, a}, x2[3] = {a * a, -a * a, a * a};
-  std::vector<Eigen::Vector3d> pts;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) pts.emplace_back(xs[i], xs[j], 0.5 * k * (x2[i] + x2[j]));
-  return nurbs::NurbsSurface(nurbs::KnotVector(2, {0, 0, 0, 1, 1, 1}),
-                             nurbs::KnotVector(2, {0, 0, 0, 1, 1, 1}), pts);
-}
 
 TEST(HardCasesTest, FocalPoint) {
   // Point on the axis of a paraboloid with vertex curvature radius 2 cm: below the focal

@@ -31,14 +31,19 @@ struct ShearedTorus {
   Vector7d Torus() const {
     return Coordinates(Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity());
   }
+  /// The extremum at the path's start, solved from the closest samples.
+  SurfaceSurfaceExtremum Start() const {
+    const BodyPose pf = BodyPose::FromCoordinates(Patch(0)),
+                   pg = BodyPose::FromCoordinates(Torus());
+    return SolveSurfaceSurface(sheared, pf, torus, pg,
+                               ClosestSamplePair(sheared, pf, torus, pg, 40));
+  }
 };
 
 TEST(TrackerTest, FollowsTheExactExtremumAtServoRateWithoutAllocating) {
   const ShearedTorus s;
-  const BodyPose pf = BodyPose::FromCoordinates(s.Patch(0)),
-                 pg = BodyPose::FromCoordinates(s.Torus());
-  const SurfaceSurfaceExtremum start = SolveSurfaceSurface(
-      s.sheared, pf, s.torus, pg, ClosestSamplePair(s.sheared, pf, s.torus, pg, 40));
+  const BodyPose pg = BodyPose::FromCoordinates(s.Torus());
+  const SurfaceSurfaceExtremum start = s.Start();
   ASSERT_EQ(start.status, ExtremalStatus::kConverged);
   ContactTracker tracker(s.sheared, s.torus);
   ASSERT_EQ(tracker.Reset(s.Patch(0), s.Torus(), start.u), TrackStatus::kTracked);
@@ -74,10 +79,8 @@ TEST(TrackerTest, FollowsTheExactExtremumAtServoRateWithoutAllocating) {
 // larger steps (~30 µm, 1 mrad a step) so the prediction's error is visible.
 TEST(TrackerTest, EachCorrectorStepSquaresTheError) {
   const ShearedTorus s;
-  const BodyPose pf = BodyPose::FromCoordinates(s.Patch(0)),
-                 pg = BodyPose::FromCoordinates(s.Torus());
-  const SurfaceSurfaceExtremum start = SolveSurfaceSurface(
-      s.sheared, pf, s.torus, pg, ClosestSamplePair(s.sheared, pf, s.torus, pg, 40));
+  const BodyPose pg = BodyPose::FromCoordinates(s.Torus());
+  const SurfaceSurfaceExtremum start = s.Start();
   ASSERT_EQ(start.status, ExtremalStatus::kConverged);
   double worst[4] = {0, 0, 0, 0};
   for (int c = 0; c <= 3; ++c) {

@@ -146,6 +146,17 @@ TEST(ContactTermsTest, BoundaryContactDerivativesMatchFiniteDifferences) {
 // The term follows its contact with contact/'s tracker; a jump the tracker cannot follow is
 // reported `lost`, counted, and answered by a full extremal solve: β afterwards equals a fresh
 // solve's, never a silently wrong extremum.
+// β at configuration q by a full extremal solve from the term's current parameters: what the
+// tracked β must equal.
+double FullSolveBeta(const Scene& s, const SurfaceContactTerm::State& st,
+                     const Eigen::VectorXd& q) {
+  std::vector<BodyPose> poses;
+  s.mech.Poses(q, &poses);
+  return contact::SolveSurfaceSurface(s.sphere, poses[static_cast<size_t>(s.a)], s.patch,
+                                      poses[static_cast<size_t>(s.b)], st.extremum().u)
+      .beta;
+}
+
 TEST(ContactTermsTest, TrackerStatesAndALostStepAreDefinedEvents) {
   Scene s;
   std::mt19937_64 rng(44);
@@ -166,11 +177,7 @@ TEST(ContactTermsTest, TrackerStatesAndALostStepAreDefinedEvents) {
     q[0] += 2e-5;
     q[11] += 1e-4;
     const double beta = Value(s.mech, *term, &st, q, nullptr);
-    s.mech.Poses(q, &poses);
-    const contact::SurfaceSurfaceExtremum full =
-        contact::SolveSurfaceSurface(s.sphere, poses[static_cast<size_t>(s.a)], s.patch,
-                                     poses[static_cast<size_t>(s.b)], st.extremum().u);
-    EXPECT_NEAR(beta, full.beta, 1e-14) << "step " << k;
+    EXPECT_NEAR(beta, FullSolveBeta(s, st, q), 1e-14) << "step " << k;
   }
   EXPECT_EQ(st.track_status, contact::TrackStatus::kTracked);
   EXPECT_EQ(st.tracked_steps, 50);
@@ -294,11 +301,7 @@ TEST(ContactTermsTest, LooserTrackingTradesExactnessForSolves) {
       q[0] += 1e-4;
       q[11] += 5e-4;
       const double beta = Value(s.mech, *term, &st, q, nullptr);
-      s.mech.Poses(q, &poses);
-      const contact::SurfaceSurfaceExtremum full =
-          contact::SolveSurfaceSurface(s.sphere, poses[static_cast<size_t>(s.a)], s.patch,
-                                       poses[static_cast<size_t>(s.b)], st.extremum().u);
-      worst[m] = std::max(worst[m], std::abs(beta - full.beta));
+      worst[m] = std::max(worst[m], std::abs(beta - FullSolveBeta(s, st, q)));
     }
     solves[m] = st.solves;
   }
