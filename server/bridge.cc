@@ -93,6 +93,7 @@ class Bridge::Impl {
         log_(log),
         status_(status_line),
         lcm_(OpenLcm(url)),
+        view_lcm_(options.view_url.empty() ? nullptr : OpenLcm(options.view_url)),
         filter_(FilterOptions(engine->servo().scene().device, options)),
         summary_(summary),
         window_prev_(DurationHistogram::kBins + 1, 0),
@@ -195,6 +196,8 @@ class Bridge::Impl {
       return;
     }
     if (fate != PacketFate::kAccepted) return;
+    last_device_ = device_msg_;  // (fixed-size fields: a copy, no allocation)
+    have_device_ = true;
     engine_->Publish(sample);
     awaiting_ = true;
     awaited_seq_ = device_msg_.seq;
@@ -227,6 +230,12 @@ class Bridge::Impl {
     lcm_->publish(ch_.contacts, &contacts_);
     ToSceneState(snap_, engine_->servo().scene(), now / 1000, &scene_msg_);
     lcm_->publish(ch_.scene, &scene_msg_);
+    if (view_lcm_) {
+      view_lcm_->publish(ch_.contacts, &contacts_);
+      view_lcm_->publish(ch_.scene, &scene_msg_);
+      if (summary_->wrenches_sent > 0) view_lcm_->publish(ch_.wrench, &wrench_);
+      if (have_device_) view_lcm_->publish(ch_.device, &last_device_);
+    }
   }
 
   /// The servo's journal into the log file (contact events, violation excursions), and a line
@@ -267,6 +276,7 @@ class Bridge::Impl {
     stats_.global_passes = engine_->global_passes();
     stats_.global_pass_us = engine_->global_histogram().max();
     lcm_->publish(ch_.stats, &stats_);
+    if (view_lcm_) view_lcm_->publish(ch_.stats, &stats_);
     WriteStatusLine(now, c);
   }
 
@@ -294,11 +304,14 @@ class Bridge::Impl {
   int64_t stalls_logged_ = 0;
   bool status_;
   std::unique_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<lcm::LCM> view_lcm_;  ///< publish only (no receive thread is started)
   std::unique_ptr<LcmSubscriptions> subs_;
   DeviceFilter filter_;
   BridgeSummary* summary_;
   // Message buffers (reused: the bridge's loop does not allocate per message).
   tangent::device_state_t device_msg_;
+  tangent::device_state_t last_device_;  ///< the last accepted, for viewers
+  bool have_device_ = false;
   tangent::wrench_t wrench_;
   tangent::contact_states_t contacts_;
   tangent::scene_state_t scene_msg_;

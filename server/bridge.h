@@ -32,6 +32,11 @@ struct Channels {
 
 /// Multicast on a non-default group with ttl=0: traffic stays on this host.
 inline constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.68:7668?ttl=0";
+/// Where viewers listen (tangent-view, docs/viewer.md): the same group on another port, so a
+/// viewer never receives the kilohertz device and wrench traffic. On loopback multicast every
+/// packet is copied to every member socket inside the sender's own send call, so a viewer on
+/// the main URL would put its wake-ups into the servo's round trip.
+inline constexpr const char* kDefaultViewLcmUrl = "udpm://239.255.76.68:7669?ttl=0";
 
 /// LCM could not start; the message says why and how to fix it.
 class LcmError : public std::runtime_error {
@@ -54,6 +59,10 @@ struct BridgeOptions {
   /// The device served (nullopt: the first whose state is accepted; docs/server.md).
   std::optional<int64_t> device_id;
   double stats_rate_hz = 1.0;  ///< loop_stats_t messages per second
+  /// Viewers' LCM URL (empty: none): the scene, contacts and statistics, and at the scene's
+  /// rate (about 30 Hz) the last wrench sent and the last device state accepted, on the same
+  /// channel names as the main URL (which carries all of these too).
+  std::string view_url = kDefaultViewLcmUrl;
 };
 
 class Bridge {

@@ -49,6 +49,9 @@ int main(int argc, char** argv) {
   app.add_option("--iterations", eo.servo.max_iterations, "solver iterations per tick")
       ->check(CLI::Range(1, 100));
   app.add_option("--lcm-url", url, "LCM URL (default: multicast with ttl=0 on a private group)");
+  app.add_option("--view-lcm-url", bo.view_url,
+                 "LCM URL for viewers: scene, contacts, statistics, and the last wrench and "
+                 "device state at about 30 Hz (\"\": none)");
   app.add_option("--device-channel", ch.device, "channel of device_state_t");
   app.add_option("--wrench-channel", ch.wrench, "channel of wrench_t");
   app.add_option("--contacts-channel", ch.contacts, "channel of contact_states_t");
@@ -88,10 +91,10 @@ int main(int argc, char** argv) {
     Bridge bridge(&engine, url, ch, log, status, bo);
     std::printf(
         "tangentd: scene \"%s\": %d bodies, %zu surfaces, %zu contact pairs, %d contacts "
-        "at rest; %.0f Hz, %d-DOF device, LCM %s\n",
+        "at rest; %.0f Hz, %d-DOF device, LCM %s, viewers on %s\n",
         scene->name.c_str(), scene->mechanism.num_bodies(), scene->surfaces.size(),
         scene->pairs.size(), engine.servo().active_contacts(), eo.rate_hz, eo.servo.dof,
-        url.c_str());
+        url.c_str(), bo.view_url.empty() ? "(none)" : bo.view_url.c_str());
     std::fflush(stdout);
     engine.Start();
     if (fault_injection) {
