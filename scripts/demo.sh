@@ -25,6 +25,7 @@ trajectory=drag
 [ -f "scenes/$scene.path.csv" ] && trajectory="scenes/$scene.path.csv"
 work=$(mktemp -d)
 cleanup() {
+  if [ -n "${view:-}" ]; then kill -INT "$view" 2>/dev/null || true; fi
   if [ -n "${server:-}" ]; then kill -INT "$server" 2>/dev/null || true; fi
   rm -rf "$work"
 }
@@ -38,6 +39,15 @@ until grep -q "^tangentd: scene" "$work/server.out"; do
   sleep 0.1
 done
 cat "$work/server.out"
+# The live 3D view (docs/viewer.md): in a browser window when there is a display; without one, a
+# snapshot PNG of the view is written when the hand has finished (so the browser's software
+# rendering does not share the cores with the run being measured).
+view=
+if [ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ] && [ -z "${DEMO_NO_VIEW:-}" ]; then
+  ./build/view/tangent-view --scene "scenes/$scene.json" --open > "$work/view.out" 2>&1 &
+  view=$!
+  echo "== tangent-view: the live view opens in a browser window"
+fi
 if [ "$trajectory" = drag ]; then
   echo "== tangent-phantom: a simulated hand drags the grasped part for ${seconds} s (lift 6 mm, then circles)"
 else
@@ -45,6 +55,23 @@ else
 fi
 ./build/server/tangent-phantom --duration "$seconds" --trajectory "$trajectory" --status \
   --log build/phantom.csv > "$work/phantom.out"
+if [ -z "$view" ] && [ -z "${DEMO_NO_VIEW:-}" ]; then
+  echo "== tangent-view: no display; a snapshot of the view where the hand stopped"
+  if ./build/view/tangent-view --scene "scenes/$scene.json" --port 0 --timeout 60 \
+       --snapshot "build/demo-view-$scene.png" > "$work/view.out" 2>&1; then
+    echo "view snapshot: build/demo-view-$scene.png"
+  else
+    cat "$work/view.out"
+    echo "view snapshot failed (the demo's results below stand)"
+  fi
+fi
+if [ -n "$view" ]; then
+  echo "== tangent-view: close the browser window or press Enter to end"
+  read -r -t 600 _ || true
+  kill -INT "$view" 2>/dev/null || true
+  wait "$view" || true
+  view=
+fi
 kill -INT "$server"
 wait "$server"
 server=

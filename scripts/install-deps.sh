@@ -31,7 +31,13 @@ packages=(
   clang libclang-rt-14-dev
   # Instructions per servo tick, independent of the machine's load (scripts/bench_report.sh).
   valgrind
+  # The live 3D view (tangent-view): WebSocket server (websocketpp on standalone asio), PNG
+  # reading in its browser test, and Chromium for snapshots and the test (headless, software
+  # WebGL). three.js comes from npm, pinned by view/web/package-lock.json (scripts/install-web.sh).
+  libwebsocketpp-dev libasio-dev libpng-dev chromium
 )
+# npm for the browser code: Debian's, unless this machine already has node and npm (NodeSource).
+command -v npm >/dev/null 2>&1 || packages+=(npm)
 
 missing=()
 for p in "${packages[@]}"; do
@@ -40,6 +46,7 @@ done
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#packages[@]} packages already installed"
+  bash "$(dirname "$0")/install-web.sh"
   exit 0
 fi
 
@@ -52,3 +59,4 @@ echo "install-deps: installing ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 apt-get update -qq
 apt-get install -y -qq --no-install-recommends "${missing[@]}"
+bash "$(dirname "$0")/install-web.sh"

@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# What an attached viewer costs the server (issue 20): the demo run alternately without a viewer,
+# with tangent-view alone (subscribed, serving no browser) and with tangent-view and a headless
+# Chromium rendering its live view (software WebGL: on this machine the browser's drawing takes
+# CPU from the same two cores the server runs on), same machine, same minutes.
+# Reports tangentd's round trip (tangent-phantom's latency p50 minus the bare LCM ping p50) and
+# its servo tick p99 (compute_p99_us); each round runs the three in turn (order alternating), and
+# the change is the median over rounds of the round's difference (paired, so the machine's
+# slower drifts cancel).
+#   bash scripts/viewer_cost.sh [--rounds N] [--seconds S]      (default 5 rounds of 10 s)
+# Runs in a private network namespace (LCM multicast on loopback only). Needs a build.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+rounds=5 seconds=10
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --rounds) rounds=$2; shift 2 ;;
+    --seconds) seconds=$2; shift 2 ;;
+    *) echo "usage: $0 [--rounds N] [--seconds S]" >&2; exit 2 ;;
+  esac
+done
+build=${TANGENT_BUILD_DIR:-build}
+if [ -z "${TANGENT_IN_NETNS:-}" ]; then
+  export TANGENT_IN_NETNS=1
+  exec unshare -rn bash "$0" --rounds "$rounds" --seconds "$seconds"
+fi
+ip link set lo up
+ip route add 224.0.0.0/4 dev lo
+work=$(mktemp -d)
+trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$work"' EXIT
+
+run() {  # run ROUND with|without -> appends "mode latency_minus_ping p99" to $work/results
+  local mode=$2 out="$work/$1-$2"
+  "$build/server/tangentd" --scene scenes/paperclips.json > "$out.server" 2>&1 &
+  local server=$!
+  until grep -q "^tangentd: scene" "$out.server"; do sleep 0.1; done
+  local view=
+  if [ "$mode" != without ]; then
+    local browser=--headless
+    [ "$mode" = with ] || browser=
+    "$build/view/tangent-view" --scene scenes/paperclips.json --port 0 $browser > "$out.view" 2>&1 &
+    view=$!
+    sleep 3  # the browser connected and drawing before the hand moves
+  fi
+  "$build/server/tangent-phantom" --duration "$seconds" --trajectory drag > "$out.phantom" 2>&1
+  local frames=-
+  if [ -n "$view" ]; then
+    kill -INT "$view"; wait "$view" || true
+    frames=$(grep -o 'frames_sent=[0-9]*' "$out.view" | cut -d= -f2)
+  fi
+  kill -INT "$server"; wait "$server" || true
+  local lat p99
+  lat=$(grep -m1 '^latency_minus_ping_p50_us=' "$out.phantom" | cut -d= -f2)
+  p99=$(grep -m1 '^compute_p99_us=' "$out.server" | cut -d= -f2)
+  echo "$1 $mode $lat $p99" >> "$work/results"
+  printf 'round %d %-7s round trip - ping p50 %6.1f us   tick p99 %6.2f us   frames to the browser %s\n' \
+    "$1" "$mode" "$lat" "$p99" "$frames"
+}
+for r in $(seq 1 "$rounds"); do
+  if [ $((r % 2)) -eq 1 ]; then
+    run "$r" without; run "$r" view; run "$r" with
+  else
+    run "$r" with; run "$r" view; run "$r" without
+  fi
+done
+/usr/bin/python3 - "$work/results" <<'PY'
+import statistics, sys
+runs = {}
+for line in open(sys.argv[1]):
+    r, mode, lat, p99 = line.split()
+    runs.setdefault(int(r), {})[mode] = (float(lat), float(p99))
+base = [v["without"] for v in runs.values()]
+print(f"without a viewer: round trip - ping p50 median {statistics.median(b[0] for b in base):.1f} us, "
+      f"tick p99 median {statistics.median(b[1] for b in base):.2f} us")
+for mode, name in (("view", "tangent-view alone"), ("with", "tangent-view + headless browser")):
+    dl = [v[mode][0] - v["without"][0] for v in runs.values()]
+    dp = [100 * (v[mode][1] / v["without"][1] - 1) for v in runs.values()]
+    print(f"{name}: round trip change median {statistics.median(dl):+.1f} us "
+          f"(rounds {min(dl):+.1f} .. {max(dl):+.1f}; limit 5 us), tick p99 change median "
+          f"{statistics.median(dp):+.1f} % (rounds {min(dp):+.1f} .. {max(dp):+.1f}; limit 5 %)")
+PY
