@@ -3,7 +3,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <stdexcept>
+#include <utility>
 
 #include <Eigen/Geometry>
 
@@ -12,6 +14,9 @@
 
 namespace tangent::view {
 namespace {
+
+/// Trim rims are drawn to 1/8 of a grid cell: the extra triangles lie along the rim only.
+constexpr int kRimDepth = 3;
 
 /// FNV-1a 64 over raw bytes: a content hash for caching, not a security measure.
 uint64_t Fnv1a(const void* data, size_t size, uint64_t h) {
@@ -61,6 +66,77 @@ void Compact(const nurbs::TriangleMesh& t, const nurbs::NurbsSurface& s, Display
   }
 }
 
+/// The cells of a tessellation grid that may hold material, with the cells a trim loop crosses
+/// split into quarters (recursively, `depth` times), so the rim is drawn to 1/2^depth of a cell
+/// instead of by whole cells. Sub-cells that certainly hold no material are dropped; no
+/// material is lost (nurbs::TrimmedDomain::MayHoldMaterial). A sub-cell's chords deviate from
+/// the surface by at most twice its cell's bound (the bilinear interpolant of a sub-rectangle
+/// differs from the cell's by the cell's error at the sub-corners), hence `bound_factor`.
+class RimRefiner {
+ public:
+  RimRefiner(const nurbs::NurbsSurface& s, const nurbs::TrimmedDomain& trim,
+             nurbs::TriangleMesh* out)
+      : s_(s), trim_(trim), out_(out) {}
+
+  void Cell(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi, int depth) {
+    if (!trim_.MayHoldMaterial(lo, hi)) return;
+    const Eigen::Vector2d mid = 0.5 * (lo + hi);
+    // Crossed: a loop passes within the cell's circumscribed circle.
+    const bool crossed = std::abs(trim_.Nearest(mid).signed_distance) <= 0.5 * (hi - lo).norm();
+    // Not crossed: all of the cell lies on its centre's side of every loop (MayHoldMaterial is
+    // conservative near chords and may have kept a cell wholly off the material).
+    if (!crossed && !trim_.Contains(mid)) return;
+    if (crossed && depth > 0) {
+      refined_ = true;
+      Cell(lo, mid, depth - 1);
+      Cell({mid.x(), lo.y()}, {hi.x(), mid.y()}, depth - 1);
+      Cell({lo.x(), mid.y()}, {mid.x(), hi.y()}, depth - 1);
+      Cell(mid, hi, depth - 1);
+      return;
+    }
+    // Split along the (0,0)-(1,1) diagonal, counter-clockwise in (u, v), as Tessellate does.
+    const int a = Vertex(lo.x(), lo.y()), b = Vertex(hi.x(), lo.y());
+    const int c = Vertex(hi.x(), hi.y()), d = Vertex(lo.x(), hi.y());
+    out_->triangles.push_back({a, b, c});
+    out_->triangles.push_back({a, c, d});
+  }
+  double bound_factor() const { return refined_ ? 2.0 : 1.0; }
+
+ private:
+  int Vertex(double u, double v) {
+    const auto [it, added] = index_.try_emplace({u, v}, static_cast<int>(out_->vertices.size()));
+    if (added) {
+      out_->vertices.push_back(s_.Evaluate(u, v, 0).S);
+      out_->uv.emplace_back(u, v);
+    }
+    return it->second;
+  }
+
+  const nurbs::NurbsSurface& s_;
+  const nurbs::TrimmedDomain& trim_;
+  nurbs::TriangleMesh* out_;
+  std::map<std::pair<double, double>, int> index_;
+  bool refined_ = false;
+};
+
+/// The display mesh of a trimmed surface: the grid's cells that may hold material, the rim's
+/// cells refined `depth` times.
+nurbs::TriangleMesh CutWithRim(const nurbs::TriangleMesh& grid, const nurbs::NurbsSurface& s,
+                               const nurbs::TrimmedDomain& trim, int depth) {
+  nurbs::TriangleMesh out;
+  RimRefiner refiner(s, trim, &out);
+  for (size_t i = 0; i + 1 < grid.u_lines.size(); ++i) {
+    for (size_t j = 0; j + 1 < grid.v_lines.size(); ++j) {
+      refiner.Cell({grid.u_lines[i], grid.v_lines[j]}, {grid.u_lines[i + 1], grid.v_lines[j + 1]},
+                   depth);
+    }
+  }
+  out.u_lines = grid.u_lines;
+  out.v_lines = grid.v_lines;
+  out.error_bound = refiner.bound_factor() * grid.error_bound;
+  return out;
+}
+
 }  // namespace
 
 std::array<float, 3> BodyColour(int body) {
@@ -100,7 +176,7 @@ std::vector<DisplayMesh> BuildDisplayMeshes(const server::Scene& scene, double t
     // A flat plate is one cell at any tolerance: a hole in it needs cells of its own scale.
     const double cell = trim_cell > 0.0 ? trim_cell : 10.0 * tolerance;
     nurbs::TriangleMesh t = nurbs::Tessellate(s.surface, tolerance, max_lines, s.trim ? cell : 0.0);
-    if (s.trim) t = nurbs::CutAlongTrim(t, *s.trim);
+    if (s.trim) t = CutWithRim(t, s.surface, *s.trim, kRimDepth);
     DisplayMesh m;
     m.surface = s.name;
     m.surface_index = index++;

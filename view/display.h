@@ -31,9 +31,10 @@ struct DisplayMesh {
 
 /// Display meshes of all surfaces of `scene`, each within `tolerance` metres of its surface
 /// (certified; a surface that needs more than max_lines lines gets a larger, reported bound).
-/// Trimmed surfaces are cut along their trims cell by cell (cells the trim crosses stay whole),
-/// on a grid whose cell chords are at most `trim_cell` metres, so a hole shows with its rim
-/// within one such cell (0: 10 × tolerance).
+/// Trimmed surfaces are cut along their trims on a grid whose cell chords are at most
+/// `trim_cell` metres (0: 10 × tolerance), the cells a trim crosses split three times, so a hole
+/// shows with its rim to 1/8 of such a cell; no material is ever left out. Their bound is then
+/// at most twice the grid's (reported in error_bound).
 /// @throws std::invalid_argument when tolerance is not positive.
 std::vector<DisplayMesh> BuildDisplayMeshes(const server::Scene& scene, double tolerance,
                                             double trim_cell = 0.0, int max_lines = 513);

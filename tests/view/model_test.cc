@@ -1,6 +1,7 @@
 #include "view/model.h"
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -180,28 +181,37 @@ TEST(DisplayMeshTest, TrimmedAwayMaterialIsNotDrawn) {
     if (!s.trim) continue;
     ++checked;
     auto uv = [&](uint32_t i) { return Eigen::Vector2d(m.uv[2 * i], m.uv[2 * i + 1]); };
-    // Cut cells are whole grid cells: a point off the material by more than a cell's diagonal
-    // lies in no kept cell, so in no drawn triangle.
-    double diagonal = 0.0;
-    for (size_t t = 0; t < m.indices.size(); t += 3) {
+    auto diagonal = [&](size_t t) {
       Eigen::AlignedBox2d box;
       for (int k = 0; k < 3; ++k) box.extend(uv(m.indices[t + static_cast<size_t>(k)]));
-      diagonal = std::max(diagonal, box.diagonal().norm());
-    }
+      return box.diagonal().norm();
+    };
+    double largest = 0.0;
+    for (size_t t = 0; t < m.indices.size(); t += 3) largest = std::max(largest, diagonal(t));
+    // A drawn triangle holding a point off the material lies in a cell the rim crosses (a cell
+    // the rim does not cross is all material or dropped), so the rim is within the triangle's
+    // diagonal of the point, and that cell was split (to 1/8 of its grid cell; grid cells
+    // differ by up to 2x here, so at most a quarter of the largest).
     std::mt19937 rng(17);
     std::uniform_real_distribution<double> ru(s.trim->lo().x(), s.trim->hi().x());
     std::uniform_real_distribution<double> rv(s.trim->lo().y(), s.trim->hi().y());
-    int off_material = 0;
+    int off_material = 0, drawn_off = 0;
     for (int k = 0; k < 10000; ++k) {
       const Eigen::Vector2d p(ru(rng), rv(rng));
-      if (s.trim->Contains(p) || std::abs(s.trim->Nearest(p).signed_distance) <= 2.0 * diagonal)
-        continue;
+      if (s.trim->Contains(p)) continue;
       ++off_material;
+      const double d = std::abs(s.trim->Nearest(p).signed_distance);
       for (size_t t = 0; t < m.indices.size(); t += 3) {
-        ASSERT_FALSE(InTriangle(p, uv(m.indices[t]), uv(m.indices[t + 1]), uv(m.indices[t + 2])))
+        if (!InTriangle(p, uv(m.indices[t]), uv(m.indices[t + 1]), uv(m.indices[t + 2]))) continue;
+        ++drawn_off;
+        ASSERT_LE(d, diagonal(t) * (1 + 1e-12))
             << m.surface << ": (" << p.x() << ", " << p.y() << ") is off the material, drawn";
+        ASSERT_LE(diagonal(t), largest / 4) << m.surface << ": a rim cell was not split at ("
+                                            << p.x() << ", " << p.y() << "), rim " << d;
       }
     }
+    std::printf("%s: %d of %d sampled points off the material lie in drawn rim cells\n",
+                m.surface.c_str(), drawn_off, off_material);
     EXPECT_GT(off_material, 100) << m.surface;
   }
   EXPECT_GT(checked, 0);
