@@ -40,7 +40,13 @@ run() {  # run ROUND with|without -> appends "mode latency_minus_ping p99" to $w
     [ "$mode" = with ] || browser=
     "$build/view/tangent-view" --scene scenes/paperclips.json --port 0 $browser > "$out.view" 2>&1 &
     view=$!
-    sleep 3  # the browser connected and drawing before the hand moves
+    # The browser connected (it starts as SCHED_IDLE: on a busy machine that takes a while), and
+    # a second for it to take the meshes and draw, before the hand moves.
+    if [ "$mode" = with ]; then
+      for _ in $(seq 1 300); do grep -q "browser connected" "$out.view" && break; sleep 0.1; done
+      grep -q "browser connected" "$out.view" || echo "round $1: the browser did not connect in 30 s"
+    fi
+    sleep 1
   fi
   "$build/server/tangent-phantom" --duration "$seconds" --trajectory drag > "$out.phantom" 2>&1
   local frames=-

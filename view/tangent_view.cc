@@ -53,6 +53,7 @@ struct Options {
   int width = 960, height = 640;
   bool open_browser = false, headless_browser = false;
   std::string priority = "idle";
+  int avoid_cpu = 0;  ///< tangentd's default --servo-cpu
 };
 
 /// A browser connected to the view.
@@ -336,6 +337,8 @@ class ViewServer {
   void OnOpen(ClientId id) {
     clients_[id] = Client{};
     ever_connected_ = true;
+    std::printf("tangent-view: a browser connected (%zu now)\n", clients_.size());
+    std::fflush(stdout);
     json meshes = json::array();
     for (const DisplayMesh& m : meshes_) {
       meshes.push_back({{"hash", m.hash}, {"surface", m.surface}, {"body", m.body}});
@@ -473,14 +476,35 @@ int Main(int argc, char** argv) {
   app.add_flag("--headless", o.headless_browser,
                "attach a headless browser that renders the live view (to measure the view's cost)");
   app.add_option("--priority", o.priority,
-                 "CPU scheduling of the view and the browser it starts: idle (SCHED_IDLE: only "
-                 "CPU time nothing else wants, so never the servo's) or normal")
+                 "CPU scheduling of the live view and the browser it starts: idle (SCHED_IDLE: "
+                 "only CPU time nothing else wants, so never the servo's) or normal; snapshots "
+                 "always run normal")
       ->check(CLI::IsMember({"idle", "normal"}));
+  app.add_option("--avoid-cpu", o.avoid_cpu,
+                 "keep the view and its browser off this core: the servo's (tangentd --servo-cpu; "
+                 "-1: any core)")
+      ->check(CLI::Range(-1, 1023));
   CLI11_PARSE(app, argc, argv);
   // Before any thread starts (LCM's receive thread, the browser's processes inherit it): a view
   // must never take CPU time from the haptic server. Under SCHED_IDLE it runs only where a core
   // would otherwise idle, and a busy machine makes it drop frames, never the servo late.
-  if (o.priority == "idle") {
+  // And off the servo's core: tangentd pins its servo thread to core 0 by default
+  // (--servo-cpu), so the view and its browser keep to the other cores where there are any.
+  if (o.avoid_cpu >= 0) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    const long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    for (long c = 0; c < cores; ++c) {
+      if (c != o.avoid_cpu) CPU_SET(static_cast<int>(c), &set);
+    }
+    if (cores > 1 && sched_setaffinity(0, sizeof(set), &set) != 0) {
+      std::fprintf(stderr, "tangent-view: could not keep off core %d (%s)\n", o.avoid_cpu,
+                   std::strerror(errno));
+    }
+  }
+  // Snapshots are one-offs that must finish: they keep the normal class (still off the servo's
+  // core), since an idle-class browser on a machine whose other cores are busy never starts.
+  if (o.priority == "idle" && o.snapshots.empty()) {
     sched_param none{};
     if (sched_setscheduler(0, SCHED_IDLE, &none) != 0) {
       std::fprintf(stderr, "tangent-view: could not switch to SCHED_IDLE (%s); running normal\n",

@@ -9,7 +9,14 @@ const width = () => (snapshotMode ? Number(params.get('w')) : window.innerWidth)
 const height = () => (snapshotMode ? Number(params.get('h')) : window.innerHeight);
 
 const renderer = new THREE.WebGLRenderer({ antialias: !snapshotMode, preserveDrawingBuffer: snapshotMode });
-renderer.setPixelRatio(snapshotMode ? 1 : window.devicePixelRatio);
+// A browser without a GPU draws WebGL on the CPU (SwiftShader, llvmpipe), on the cores the
+// haptic server needs: the live view then draws at half resolution with cheaper shading.
+// Snapshots keep full quality (they are taken once).
+const gl = renderer.getContext();
+const info = gl.getExtension('WEBGL_debug_renderer_info');
+const glRenderer = info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : '';
+const softwareGL = !snapshotMode && /SwiftShader|llvmpipe|softpipe|Software/i.test(glRenderer);
+renderer.setPixelRatio(snapshotMode ? 1 : softwareGL ? 0.5 : window.devicePixelRatio);
 renderer.setSize(width(), height());
 document.body.prepend(renderer.domElement);
 
@@ -74,7 +81,13 @@ function onScene(m) {
   sceneInfo = m;
   for (const g of bodies) scene3.remove(g);
   bodies = m.bodies.map(() => new THREE.Group());
-  for (const g of bodies) scene3.add(g);
+  for (const g of bodies) {
+    // The body frame: x red, y green, z blue at the body's origin (scaled to the scene in fitScene).
+    const frame = new THREE.AxesHelper(1);
+    frame.name = 'frame';
+    g.add(frame);
+    scene3.add(g);
+  }
   pending = new Set();
   for (const entry of m.meshes) {
     if (meshCache.has(entry.hash)) addMesh(entry.hash, entry.body);
@@ -105,9 +118,10 @@ function onMesh(m) {
 
 function addMesh(hash, body) {
   const { geometry, colour } = meshCache.get(hash);
-  const material = new THREE.MeshStandardMaterial({
-    color: new THREE.Color(colour[0], colour[1], colour[2]), roughness: 0.55, metalness: 0.05,
-    side: THREE.DoubleSide });
+  const color = new THREE.Color(colour[0], colour[1], colour[2]);
+  const material = softwareGL
+    ? new THREE.MeshLambertMaterial({ color, side: THREE.DoubleSide })
+    : new THREE.MeshStandardMaterial({ color, roughness: 0.55, metalness: 0.05, side: THREE.DoubleSide });
   bodies[body].add(new THREE.Mesh(geometry, material));
 }
 
@@ -124,7 +138,7 @@ function setCamera(position, target) {
 let fitted = false;
 function fitScene() {
   const box = new THREE.Box3();
-  for (const g of bodies) box.expandByObject(g);
+  for (const g of bodies) for (const c of g.children) if (c.isMesh) box.expandByObject(c);
   if (box.isEmpty()) return;
   fitted = true;
   const centre = box.getCenter(new THREE.Vector3());
@@ -140,6 +154,7 @@ function fitScene() {
     setCamera(centre.clone().addScaledVector(dir, 0.6 * size / Math.sin(narrow)).toArray(), centre.toArray());
   }
   grasp.scale.setScalar(size * 0.006);
+  for (const g of bodies) g.getObjectByName('frame').scale.setScalar(size * 0.04);
   tool.scale.setScalar(size * 0.06);
 }
 
@@ -186,7 +201,7 @@ function onState(m) {
     const len = size * 0.3 * Math.min(1, fn / (sceneInfo ? sceneInfo.max_force : 1)) + size * 0.02;
     forceArrow.setLength(len, size * 0.02, size * 0.01);
   }
-  const lines = [`${sceneInfo ? sceneInfo.name : ''}  (${sceneInfo ? sceneInfo.mode : ''})`];
+  const lines = [`${sceneInfo ? sceneInfo.name : ''}  (${sceneInfo ? sceneInfo.mode : ''}${softwareGL ? ', software WebGL: half resolution' : ''})`];
   if (m.stats) {
     lines.push(`loop ${m.stats.rate_hz.toFixed(0)} Hz   tick p50 ${m.stats.p50_us.toFixed(1)} µs  p99 ${m.stats.p99_us.toFixed(1)} µs`);
     lines.push(`violation ${m.stats.violation.toExponential(1)} m`);
