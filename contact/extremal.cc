@@ -711,7 +711,7 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
   lo << Lo(f), g.domain_begin();
   hi << Hi(f), g.domain_end();
   auto opt = Convert<3>(options);
-  opt.periodic = {f.periodic_u(), f.periodic_v(), false};
+  opt.periodic = {f.periodic_u(), f.periodic_v(), g.periodic()};
   internal::NewtonSystem<3> sys;
   // Poles of f against a curve are not handled yet (the pair and point solvers handle them).
   auto no_pole = [](const Eigen::Vector3d&, Eigen::Vector3d*) { return PoleAction::kNone; };

@@ -44,10 +44,14 @@ void EvaluatePlaced(const nurbs::NurbsSurface& surface, const BodyPose& pose, do
 class BodyCurve {
  public:
   explicit BodyCurve(const nurbs::NurbsCurve3d* space_curve) : space_(space_curve) {}
-  BodyCurve(const nurbs::NurbsSurface* surface, const nurbs::NurbsCurve2d* domain_curve)
-      : surface_(surface), domain_(domain_curve) {}
+  /// `periodic`: the curve is closed with a continuous first derivative across its ends (a
+  /// trim loop's circle), so its parameter wraps round instead of stopping at the ends.
+  BodyCurve(const nurbs::NurbsSurface* surface, const nurbs::NurbsCurve2d* domain_curve,
+            bool periodic = false)
+      : surface_(surface), domain_(domain_curve), periodic_(periodic) {}
   double domain_begin() const;
   double domain_end() const;
+  bool periodic() const { return periodic_; }
   /// g, g', g'' in the body frame at τ (chain rule for a curve on a surface).
   nurbs::CurvePoint<3> Evaluate(double tau, int* span_hint, nurbs::SpanHint* surface_hint) const;
 
@@ -55,6 +59,7 @@ class BodyCurve {
   const nurbs::NurbsCurve3d* space_ = nullptr;
   const nurbs::NurbsSurface* surface_ = nullptr;
   const nurbs::NurbsCurve2d* domain_ = nullptr;
+  bool periodic_ = false;
 };
 
 /// A curve point on a body, body and world.

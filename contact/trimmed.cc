@@ -4,6 +4,21 @@
 
 namespace tangent::contact {
 
+namespace {
+
+// Whether two pieces meet with one first derivative (C¹: position to 1e-12 of the curve's size,
+// derivative to 1e-9 relative), as the standard rational circle's quarter points and its closure
+// do: the edge's Newton then crosses the joint instead of stopping at it.
+bool JoinsSmoothly(const nurbs::NurbsCurve2d& left, const nurbs::NurbsCurve2d& right) {
+  const nurbs::CurvePoint<2> a = left.Evaluate(left.knots().domain_end(), 1);
+  const nurbs::CurvePoint<2> b = right.Evaluate(right.knots().domain_begin(), 1);
+  const double size = 1.0 + a.C.norm();
+  return (a.C - b.C).norm() <= 1e-12 * size &&
+         (a.C1 - b.C1).norm() <= 1e-9 * (a.C1.norm() + b.C1.norm()) + 1e-14 * size;
+}
+
+}  // namespace
+
 TrimEdges::TrimEdges(const nurbs::NurbsSurface* f, const nurbs::TrimmedDomain* trim)
     : f_(f), trim_(trim) {
   for (const nurbs::TrimLoop& loop : trim_->loops()) {
@@ -16,11 +31,15 @@ TrimEdges::TrimEdges(const nurbs::NurbsSurface* f, const nurbs::TrimmedDomain* t
         if (c.knots().Multiplicity(knot) < c.degree()) continue;  // C¹ or smoother there
         if (!(knot > k.domain_begin() && knot < k.domain_end())) continue;
         auto [left, right] = nurbs::Split(rest, knot);
+        if (JoinsSmoothly(left, right)) continue;  // C¹ although the knot is full
         pieces_.back().push_back({static_cast<int>(ci), std::move(left)});
         rest = std::move(right);
       }
       pieces_.back().push_back({static_cast<int>(ci), std::move(rest)});
     }
+    // One smooth piece closing on itself with one derivative: its parameter wraps round.
+    Piece& first = pieces_.back().front();
+    first.periodic = pieces_.back().size() == 1 && JoinsSmoothly(first.c, first.c);
   }
 }
 
@@ -60,7 +79,7 @@ void TrimEdges::Solve(const nurbs::NurbsSurface& g, const BodyPose& pose_g, cons
   bool at_joint = false;
   for (int walk = 0; walk <= n; ++walk) {
     const Piece& x = loop[static_cast<size_t>(e->piece)];
-    e->ext = SolveCurveSurface(g, pose_g, BodyCurve(f_, &x.c), pose_f, e->u);
+    e->ext = SolveCurveSurface(g, pose_g, BodyCurve(f_, &x.c, x.periodic), pose_f, e->u);
     e->u = e->ext.u;
     if (!e->ext.at_bound[2]) break;
     const bool at_end = e->u[2] >= 0.5 * (x.c.knots().domain_begin() + x.c.knots().domain_end());
@@ -89,7 +108,8 @@ TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
                               const SurfaceSurfaceExtremum& face, const TrimEdges::Edge* from) {
   TrimmedMeasure m;
   const Eigen::Vector2d uv = face.u.head<2>();
-  if (edges.trim().Contains(uv)) {
+  nurbs::TrimmedDomain::Closest near;
+  if (edges.trim().Contains(uv, &near)) {
     m.beta = face.beta;
     m.p_f = face.p_f;
     m.p_g = face.p_g;
@@ -97,8 +117,10 @@ TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
     return m;
   }
   m.on_edge = true;
-  const nurbs::TrimmedDomain::Closest near = edges.trim().Nearest(uv);
-  if (from && from->loop == near.loop) {
+  // The edge followed stays on its loop while that is the nearest (with one loop, always).
+  const bool one_loop = edges.trim().loops().size() == 1;
+  if (!(from && one_loop) && near.loop < 0) near = edges.trim().Nearest(uv);
+  if (from && (one_loop || from->loop == near.loop)) {
     m.edge = *from;
   } else {
     edges.StartNear(near, g, pose_g, pose_f, face.u.tail<2>(), &m.edge);

@@ -19,16 +19,18 @@
 
 namespace tangent::contact {
 
-/// A trimmed surface's edges, ready for curve–surface solves: each loop's curves cut at their
-/// C⁰ knots (a polyline's vertices) into smooth pieces, in order round the loop, over the
-/// curves' own parameters. The edge's extremal Newton runs on one smooth piece; when its
-/// extremum stops at a piece's end it walks on to the neighbour, and it stays at a corner only
-/// where both neighbours put it there.
+/// A trimmed surface's edges, ready for curve–surface solves: each loop's curves cut where they
+/// are only C⁰ (a polyline's vertices; not a rational circle's full knots, where it is C¹) into
+/// smooth pieces, in order round the loop, over the curves' own parameters. A loop that is one
+/// smooth piece closing on itself with one derivative (a circle) is periodic: its parameter wraps.
+/// The edge's extremal Newton runs on one smooth piece; when its extremum stops at a piece's end it
+/// walks on to the neighbour, and it stays at a corner only where both neighbours put it there.
 class TrimEdges {
  public:
   struct Piece {
     int curve = 0;  ///< the loop's curve this piece is cut from
     nurbs::NurbsCurve2d c;
+    bool periodic = false;  ///< closed on itself, C¹ across its ends
   };
   /// An edge extremum being followed: which piece, and (s, t, τ) (g's parameters, then the
   /// piece's curve parameter).
@@ -60,7 +62,8 @@ class TrimEdges {
              Edge* e) const;
   /// The piece *e is on as a curve on f's body.
   BodyCurve Curve(const Edge& e) const {
-    return BodyCurve(f_, &pieces_[static_cast<size_t>(e.loop)][static_cast<size_t>(e.piece)].c);
+    const Piece& p = pieces_[static_cast<size_t>(e.loop)][static_cast<size_t>(e.piece)];
+    return BodyCurve(f_, &p.c, p.periodic);
   }
 
  private:

@@ -201,6 +201,17 @@ TrimmedDomain::TrimmedDomain(const Eigen::Vector2d& lo, const Eigen::Vector2d& h
                            p.t0, p.t1, p.band});
       }
     }
+    loop_box_.assign(static_cast<size_t>(num_loops), {});
+    for (int l = 0; l < num_loops; ++l) {
+      LoopBox& box = loop_box_[static_cast<size_t>(l)];
+      box.lo = box.hi = chords_[static_cast<size_t>(loop_chords_[static_cast<size_t>(l)][0])].a;
+      for (int c : loop_chords_[static_cast<size_t>(l)]) {
+        const Chord& x = chords_[static_cast<size_t>(c)];
+        box.lo = box.lo.cwiseMin(x.a).cwiseMin(x.b);
+        box.hi = box.hi.cwiseMax(x.a).cwiseMax(x.b);
+        box.band = std::max(box.band, x.band);
+      }
+    }
   };
   auto neighbours = [&](int i, int j) {
     const Chord &x = chords_[static_cast<size_t>(i)], &y = chords_[static_cast<size_t>(j)];
@@ -322,6 +333,8 @@ int TrimmedDomain::Side(int loop, const Eigen::Vector2d& uv) const {
   // The winding number of the loop's chords about uv with CGAL's exact orientation predicate
   // (the y comparisons are exact on doubles): the exact answer for the polygon of the chords'
   // double vertices, allocation free.
+  // Outside the box of the polygon's vertices: outside the polygon (no predicate needed).
+  if (!loop_box_[static_cast<size_t>(loop)].Holds(uv, 0.0)) return CGAL::ON_UNBOUNDED_SIDE;
   const P2 p = ToP2(uv);
   int winding = 0;
   for (int c : loop_chords_[static_cast<size_t>(loop)]) {
@@ -354,11 +367,21 @@ bool TrimmedDomain::PolygonContains(const Eigen::Vector2d& uv) const {
   return true;
 }
 
-bool TrimmedDomain::Contains(const Eigen::Vector2d& uv) const {
+bool TrimmedDomain::Contains(const Eigen::Vector2d& uv, Closest* nearest) const {
+  if (nearest) nearest->loop = -1;
   if (!uv.allFinite()) return false;
   if ((uv.array() < lo_.array()).any() || (uv.array() > hi_.array()).any()) return false;
-  for (const Chord& c : chords_) {
-    if (PointSegmentDistance(uv, c.a, c.b) <= c.band) return Nearest(uv).signed_distance >= 0.0;
+  for (int l = 0; l < static_cast<int>(loops_.size()); ++l) {
+    const LoopBox& box = loop_box_[static_cast<size_t>(l)];
+    if (!box.Holds(uv, box.band)) continue;  // farther than any of its chords' bands
+    for (int k : loop_chords_[static_cast<size_t>(l)]) {
+      const Chord& c = chords_[static_cast<size_t>(k)];
+      if (PointSegmentDistance(uv, c.a, c.b) <= c.band) {
+        const Closest near = Nearest(uv);
+        if (nearest) *nearest = near;
+        return near.signed_distance >= 0.0;
+      }
+    }
   }
   return PolygonContains(uv);
 }

@@ -79,7 +79,10 @@ class TrimmedDomain {
   /// Whether (u, v) is on the material (the boundary itself counts as material). Allocation
   /// free, as is Nearest (TrimmedContactTerm calls both inside a solve) — save where CGAL's
   /// filtered predicate falls back to exact arithmetic on a point within rounding of a chord.
-  bool Contains(const Eigen::Vector2d& uv) const;
+  bool Contains(const Eigen::Vector2d& uv) const { return Contains(uv, nullptr); }
+  /// Same; when the answer needed the closest loop point (uv within a chord's band), it is left
+  /// in *nearest (may be null), else nearest->loop is −1.
+  bool Contains(const Eigen::Vector2d& uv, Closest* nearest) const;
   /// The closest point of the loops to (u, v) and the signed distance to it.
   Closest Nearest(const Eigen::Vector2d& uv) const;
   /// Whether the parameter rectangle [lo, hi] may hold material: false only when it certainly
@@ -112,6 +115,16 @@ class TrimmedDomain {
   std::vector<TrimLoop> loops_;
   std::vector<Chord> chords_;
   std::vector<std::vector<int>> loop_chords_;  ///< per loop, its chords in order
+  /// Per loop, the box of its chords' ends and their largest band: a point outside the box is
+  /// outside the loop's polygon, and one outside it grown by the band is outside every band.
+  struct LoopBox {
+    Eigen::Vector2d lo, hi;
+    double band = 0.0;
+    bool Holds(const Eigen::Vector2d& x, double grow) const {
+      return (x.array() >= lo.array() - grow).all() && (x.array() <= hi.array() + grow).all();
+    }
+  };
+  std::vector<LoopBox> loop_box_;
 };
 
 /// A tessellation cut along a trim: the grid cells that certainly hold no material

@@ -1,8 +1,10 @@
 // contact/trimmed.h: the distance on a trimmed surface's material. A ball over a hole whose
 // nearest rim point is a corner of the loop (a wedge of material pointing into the hole): the
 // edge's extremum is held at the joint of two pieces, both pushing into it, and that is the
-// contact (converged, the corner point), not a border of the loop; and a ball over a circular
-// hole measured at the rim through every quarter point of the circle (its pieces' joints).
+// contact (converged, the corner point), not a border of the loop; a ball over a circular
+// hole measured at the rim through every quarter point of the circle (full knots where the
+// circle is C¹); and the circle followed across its closure, which is no joint (one periodic
+// piece: the edge's Newton wraps round instead of stopping there).
 
 #include "contact/trimmed.h"
 
@@ -79,6 +81,53 @@ TEST(TrimmedTest, ARoundRimIsMeasuredThroughItsQuarterPoints) {
     worst_beta = std::max(worst_beta, std::abs(m.beta - 0.05 * mm));
   }
   EXPECT_EQ(worst_status, static_cast<int>(ExtremalStatus::kConverged));
+  EXPECT_LT(worst_beta, 1e-12);
+}
+
+TEST(TrimmedTest, ACircleIsOnePeriodicPieceFollowedAcrossItsClosure) {
+  const nurbs::NurbsSurface plate =
+      nurbs::MakePlanePatch({0, 0, 0}, {40 * mm, 0, 0}, {0, 40 * mm, 0});
+  const nurbs::TrimmedDomain trim(
+      {0, 0}, {1, 1}, std::nullopt,
+      {nurbs::TrimLoop{{nurbs::MakeCircle2d({0.5, 0.5}, 0.125, true)}}});
+  const TrimEdges edges(&plate, &trim);
+  ASSERT_EQ(edges.loops().size(), 1u);
+  ASSERT_EQ(edges.loops()[0].size(), 1u);  // its quarter points' full knots are C¹: not cut
+  EXPECT_TRUE(edges.loops()[0][0].periodic);
+  // A polyline's vertices stay joints, and an open run of pieces is not periodic.
+  const nurbs::TrimmedDomain square(
+      {0, 0}, {1, 1}, std::nullopt,
+      {nurbs::TrimLoop{
+          {nurbs::MakePolyline2d({{0.3, 0.3}, {0.3, 0.7}, {0.7, 0.7}, {0.7, 0.3}, {0.3, 0.3}})}}});
+  const TrimEdges square_edges(&plate, &square);
+  ASSERT_EQ(square_edges.loops()[0].size(), 4u);
+  EXPECT_FALSE(square_edges.loops()[0][0].periodic);
+
+  // The ball slides along the rim through the circle's closure (angle 0: τ = 0 ≡ 1), each
+  // measure following the last edge: it stays on the one piece, never held at a bound, and
+  // each solve converges in a few Newton steps.
+  const nurbs::NurbsSurface ball = nurbs::MakeSphere({0, 0, 0}, 4 * mm);
+  const double z = std::sqrt(4.05 * 4.05 - 2.5 * 2.5) * mm;
+  TrimEdges::Edge last;
+  bool have_last = false;
+  int most_iterations = 0;
+  double worst_beta = 0.0;
+  for (int k = -20; k <= 20; ++k) {
+    const double a = 1e-3 * k;
+    const BodyPose pose =
+        At({20 * mm + 2.5 * mm * std::cos(a), 20 * mm + 2.5 * mm * std::sin(a), z});
+    const TrimmedMeasure m = MeasureTrimmed(edges, At(Eigen::Vector3d::Zero()), ball, pose,
+                                            Face(plate, ball, pose), have_last ? &last : nullptr);
+    ASSERT_TRUE(m.on_edge) << k;
+    EXPECT_EQ(m.status, ExtremalStatus::kConverged) << k;
+    EXPECT_FALSE(m.edge.ext.at_bound[2]) << k;
+    EXPECT_EQ(m.edge.piece, 0) << k;
+    if (have_last) most_iterations = std::max(most_iterations, m.edge.ext.iterations);
+    worst_beta = std::max(worst_beta, std::abs(m.beta - 0.05 * mm));
+    last = m.edge;
+    have_last = true;
+  }
+  EXPECT_LE(most_iterations, 4);
   EXPECT_LT(worst_beta, 1e-12);
 }
 

@@ -39,7 +39,7 @@ TEST(TrimTest, ACircularHoleIsClassifiedExactlyOn100kPoints) {
   EXPECT_TRUE(warnings.empty());
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  int disagreements = 0, near = 0, checked = 0;
+  int disagreements = 0, near = 0, checked = 0, with_nearest = 0;
   const double kBand = 1e-12;  // the stated band: within it either answer is accepted
   for (int i = 0; i < 100000; ++i) {
     V p;
@@ -54,8 +54,17 @@ TEST(TrimTest, ACircularHoleIsClassifiedExactlyOn100kPoints) {
     const double exact = (p - c).norm() - r;
     if (std::abs(exact) <= kBand) continue;
     ++checked;
-    disagreements += d.Contains(p) != (exact > 0.0);
+    TrimmedDomain::Closest nearest;
+    const bool in = d.Contains(p, &nearest);
+    disagreements += in != (exact > 0.0);
+    // The closest point comes back exactly when classifying needed it: within a chord's band.
+    if (nearest.loop >= 0) {
+      ++with_nearest;
+      EXPECT_EQ(nearest.signed_distance, d.Nearest(p).signed_distance);
+    }
+    EXPECT_EQ(in, d.Contains(p));
   }
+  EXPECT_GT(with_nearest, 10000);
   std::printf("%d points checked (%d within the polygon's band), %d disagreements\n", checked, near,
               disagreements);
   EXPECT_GT(near, 20000);
