@@ -18,12 +18,6 @@ Dexterity::Dexterity(const Problem& problem, const Attachment& end_effector,
   a_row_ = aux_.num_equality_rows();
   // θ through RevoluteLimits' first row θ − lo (its Jacobian and Hessian are θ's).
   for (const auto& [a, b] : joints) aux_.AddEquality(RevoluteLimits(a, b, -4.0, 4.0));
-  const Mechanism& mech = problem.mechanism();
-  body_of_coordinate_.assign(static_cast<size_t>(mech.num_coordinates()), -1);
-  for (int i = 0; i < mech.num_bodies(); ++i) {
-    if (mech.offset(i) < 0) continue;
-    for (int c = 0; c < 7; ++c) body_of_coordinate_[static_cast<size_t>(mech.offset(i) + c)] = i;
-  }
 }
 
 Dexterity::Measures Dexterity::Evaluate(const Eigen::VectorXd& q, bool gradients) const {
@@ -65,7 +59,6 @@ Dexterity::Measures Dexterity::Evaluate(const Eigen::VectorXd& q, int gradients)
   out.force_transmission = s_max > 0 ? 1.0 / s_max : 0.0;
   if (!gradients) return out;
 
-  const Eigen::PartialPivLU<Eigen::MatrixXd> lu_t(B.transpose());
   const Eigen::MatrixXd& U = svd.matrixU();
   const Eigen::MatrixXd& V = svd.matrixV();
   // G = ∂f/∂J for each measure (∂σ_i = u_iᵀ ∂J v_i).
@@ -77,35 +70,20 @@ Dexterity::Measures Dexterity::Evaluate(const Eigen::VectorXd& q, int gradients)
   const Eigen::MatrixXd G_force = -G_max / (s_max * s_max);
 
   auto gradient = [&](const Eigen::MatrixXd& G) {
-    // ∂f/∂q_k = ⟨Y1, ∂X/∂q_k⟩ + ⟨Y2, ∂B/∂q_k⟩, Y1 = G Sᵀ, Y2 = −B⁻ᵀ Xᵀ Y1.
+    // ∂f/∂q_k = ⟨Y1, ∂X/∂q_k⟩ + ⟨Y2, ∂B/∂q_k⟩, Y1 = G Sᵀ, Y2 = −B⁻ᵀ Xᵀ Y1. X's and B's rows are
+    // constraint rows' gradients, so this is Σ_r ∇²c_r W(r, :)ᵀ with W the rows of Y1 and Y2
+    // that weigh row r: one Hessian per row, not one per coordinate (it used to assemble an
+    // n × n Hessian per coordinate for its one column: two thirds of a design solve's time).
     const Eigen::MatrixXd Y1 = G * S.transpose();
-    const Eigen::MatrixXd Y2 = -lu_t.solve(X.transpose() * Y1);
+    const Eigen::MatrixXd XtY1 = X.transpose() * Y1;
+    Eigen::MatrixXd Y2 = lu.transpose().solve(XtY1);  // B⁻ᵀ by B's own LU
+    Y2 = -Y2;
     Eigen::VectorXd grad = Eigen::VectorXd::Zero(n);
-    Eigen::VectorXd w_main(mc), w_aux = Eigen::VectorXd::Zero(aux_.num_equality_rows());
-    Eigen::MatrixXd H(n, n);
-    for (int j = 0; j < n; ++j) {
-      // Only the terms on coordinate j's body have second derivatives in row j: the others get
-      // zero weight and are skipped (a third of the Hessian evaluations on a three-link chain).
-      const int body = body_of_coordinate_[static_cast<size_t>(j)];
-      H.setZero();
-      w_main = Y2.col(j).head(mc);
-      for (const Problem::Entry& e : problem_.equalities()) {
-        if (e.term->body_a() != body && e.term->body_b() != body) {
-          w_main.segment(e.row, e.term->dim()).setZero();
-        }
-      }
-      main.AddCurvature(problem_.equalities(), w_main, &H);
-      w_aux.setZero();
-      for (const Problem::Entry& e : aux_.equalities()) {
-        if (e.term->body_a() != body && e.term->body_b() != body) continue;
-        if (e.row == x_row_) w_aux.segment<3>(x_row_) = Y1.col(j);
-        for (int k = 0; k < m_; ++k) {
-          if (e.row == a_row_ + 2 * k) w_aux[a_row_ + 2 * k] = Y2(mc + k, j);
-        }
-      }
-      aux.AddCurvature(aux_.equalities(), w_aux, &H);
-      grad += H.col(j);
-    }
+    main.AddRowHessiansTimes(ProblemEvaluator::kEquality, Y2.topRows(mc), &grad);
+    Eigen::MatrixXd W_aux = Eigen::MatrixXd::Zero(aux_.num_equality_rows(), n);
+    W_aux.middleRows(x_row_, 3) = Y1;
+    for (int k = 0; k < m_; ++k) W_aux.row(a_row_ + 2 * k) = Y2.row(mc + k);
+    aux.AddRowHessiansTimes(ProblemEvaluator::kEquality, W_aux, &grad);
     return grad;
   };
   if (gradients & GradientBit(DexterityMeasure::kDexterity)) {

@@ -59,7 +59,6 @@ class Dexterity {
   const Problem& problem_;
   Problem aux_;  ///< unit quaternions, then X (3 rows), then one angle row per chosen joint
   int x_row_ = 0, a_row_ = 0, m_ = 0;
-  std::vector<int> body_of_coordinate_;  ///< the moving body of each coordinate
 };
 
 std::shared_ptr<DesignObjective> MakeDexterityObjective(std::shared_ptr<const Dexterity> d,

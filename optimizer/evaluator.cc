@@ -206,6 +206,38 @@ void ProblemEvaluator::AddCurvature(Kind kind, const Eigen::VectorXd& weights, B
   rotations_pending_ = true;
 }
 
+void ProblemEvaluator::AddRowHessiansTimes(Kind kind, const Eigen::MatrixXd& Y,
+                                           Eigen::VectorXd* g) {
+  TermHessian h;
+  Eigen::VectorXd w;
+  const Eigen::Vector4d identity(1.0, 0.0, 0.0, 0.0);
+  for (const Item& it : items_[kind]) {
+    if (!it.term->has_hessian()) continue;
+    w.setZero(it.dim);
+    for (int r = 0; r < it.dim; ++r) {
+      if (Y.row(it.row + r).isZero(0.0)) continue;
+      w[r] = 1.0;
+      h.SetZero();
+      it.term->AddWeightedHessian(poses_, it.state, w, &h);
+      w[r] = 0.0;
+      h.Fold(it.block_a >= 0 ? poses_[static_cast<size_t>(it.body_a)].q.tail<4>() : identity,
+             it.block_b >= 0 ? poses_[static_cast<size_t>(it.body_b)].q.tail<4>() : identity);
+      // The row's Hessian has the blocks [aa ab; abᵀ bb] on the two bodies' coordinates.
+      const int a = 7 * it.block_a, b = 7 * it.block_b;
+      if (it.block_a >= 0) {
+        const auto y_a = Y.row(it.row + r).segment<7>(a).transpose();
+        g->segment<7>(a) += h.aa * y_a;
+        if (it.block_b >= 0) g->segment<7>(b) += h.ab.transpose() * y_a;
+      }
+      if (it.block_b >= 0) {
+        const auto y_b = Y.row(it.row + r).segment<7>(b).transpose();
+        g->segment<7>(b) += h.bb * y_b;
+        if (it.block_a >= 0) g->segment<7>(a) += h.ab * y_b;
+      }
+    }
+  }
+}
+
 void ProblemEvaluator::FoldRotations(BlockMatrix* H) {
   if (!rotations_pending_) return;
   const Mechanism& m = problem_.mechanism();

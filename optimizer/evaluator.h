@@ -54,6 +54,11 @@ class ProblemEvaluator {
                    const Eigen::MatrixXd& M) const;
   void ObjectiveGradient(const Eigen::VectorXd& q, const Eigen::VectorXd& q_ref,
                          const Eigen::MatrixXd& M, Eigen::VectorXd* g) const;
+  /// *g += Σ_rows ∇²r_row · Y.row(row)ᵀ over the kind's terms with second derivatives (Y: the
+  /// kind's rows × coordinates): each row's Hessian times its own direction, i.e. the gradient
+  /// of ⟨Y, J_kind(q)⟩ at fixed Y. One weighted Hessian per row whose direction is not zero,
+  /// folded per term; no n × n matrix is formed. (Dexterity's gradients.)
+  void AddRowHessiansTimes(Kind kind, const Eigen::MatrixXd& Y, Eigen::VectorXd* g);
   /// H += Σ w ∇²r over `list`'s kind (dense H; folds its rotations itself).
   void AddCurvature(const std::vector<Problem::Entry>& list, const Eigen::VectorXd& weights,
                     Eigen::MatrixXd* H);
