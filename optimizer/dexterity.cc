@@ -33,8 +33,8 @@ Dexterity::Measures Dexterity::Evaluate(const Eigen::VectorXd& q, int gradients)
                              " degrees of freedom by its equality rows");
   }
   ProblemEvaluator main(problem_), aux(aux_);
-  main.Evaluate(q);
-  aux.Evaluate(q);
+  main.EvaluateEqualities(q);  // (only the equality rows make B and X)
+  aux.EvaluateEqualities(q);
   Eigen::MatrixXd B(n, n);
   B.topRows(mc) = main.J_e();
   for (int k = 0; k < m_; ++k) B.row(mc + k) = aux.J_e().row(a_row_ + 2 * k);
@@ -69,15 +69,17 @@ Dexterity::Measures Dexterity::Evaluate(const Eigen::VectorXd& q, int gradients)
   const Eigen::MatrixXd G_inv = G_min / s_max - (s_min / (s_max * s_max)) * G_max;
   const Eigen::MatrixXd G_force = -G_max / (s_max * s_max);
 
+  // B⁻ᵀ Xᵀ (n × 3) once for every measure: Y2 below is this times Y1, so the solve has 3
+  // right-hand sides instead of n.
+  const Eigen::MatrixXd Xt = X.transpose();
+  const Eigen::MatrixXd Z = lu.transpose().solve(Xt);
   auto gradient = [&](const Eigen::MatrixXd& G) {
     // ∂f/∂q_k = ⟨Y1, ∂X/∂q_k⟩ + ⟨Y2, ∂B/∂q_k⟩, Y1 = G Sᵀ, Y2 = −B⁻ᵀ Xᵀ Y1. X's and B's rows are
     // constraint rows' gradients, so this is Σ_r ∇²c_r W(r, :)ᵀ with W the rows of Y1 and Y2
     // that weigh row r: one Hessian per row, not one per coordinate (it used to assemble an
     // n × n Hessian per coordinate for its one column: two thirds of a design solve's time).
     const Eigen::MatrixXd Y1 = G * S.transpose();
-    const Eigen::MatrixXd XtY1 = X.transpose() * Y1;
-    Eigen::MatrixXd Y2 = lu.transpose().solve(XtY1);  // B⁻ᵀ by B's own LU
-    Y2 = -Y2;
+    const Eigen::MatrixXd Y2 = -Z * Y1;
     Eigen::VectorXd grad = Eigen::VectorXd::Zero(n);
     main.AddRowHessiansTimes(ProblemEvaluator::kEquality, Y2.topRows(mc), &grad);
     Eigen::MatrixXd W_aux = Eigen::MatrixXd::Zero(aux_.num_equality_rows(), n);

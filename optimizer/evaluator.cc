@@ -56,14 +56,20 @@ std::vector<std::pair<int, int>> ProblemEvaluator::CoupledBlocks() const {
   return pairs;
 }
 
-void ProblemEvaluator::Evaluate(const Eigen::VectorXd& q) {
+void ProblemEvaluator::Evaluate(const Eigen::VectorXd& q) { EvaluateKinds(q, 0, 2); }
+
+void ProblemEvaluator::EvaluateEqualities(const Eigen::VectorXd& q) {
+  EvaluateKinds(q, kEquality, kEquality);
+}
+
+void ProblemEvaluator::EvaluateKinds(const Eigen::VectorXd& q, int first, int last) {
   const Mechanism& m = problem_.mechanism();
   for (int i = 0; i < m.num_bodies(); ++i) {
     if (m.offset(i) >= 0) {
       poses_[static_cast<size_t>(i)] = BodyPose::FromCoordinates(q.segment<7>(m.offset(i)));
     }
   }
-  for (int k = 0; k < 3; ++k) {
+  for (int k = first; k <= last; ++k) {
     for (const Item& it : items_[k]) {
       auto ja = J_a_[k].middleRows(it.row, it.dim);
       auto jb = J_b_[k].middleRows(it.row, it.dim);
@@ -71,16 +77,19 @@ void ProblemEvaluator::Evaluate(const Eigen::VectorXd& q) {
       if (it.block_b < 0) jb.setZero();
       if (it.block_a < 0) ja.setZero();
     }
-    if (!dense_jacobians_) continue;
-    Eigen::MatrixXd& J = dense_[k];
-    J.setZero();
-    for (const Item& it : items_[k]) {
-      if (it.block_a >= 0)
-        J.block(it.row, 7 * it.block_a, it.dim, 7) = J_a_[k].middleRows(it.row, it.dim);
-      // += : a term may name one body twice.
-      if (it.block_b >= 0)
-        J.block(it.row, 7 * it.block_b, it.dim, 7) += J_b_[k].middleRows(it.row, it.dim);
-    }
+    if (dense_jacobians_) DenseJacobian(static_cast<Kind>(k), &dense_[k]);
+  }
+}
+
+void ProblemEvaluator::DenseJacobian(Kind kind, Eigen::MatrixXd* J) const {
+  // (Sized once: no allocation when J already has the shape.)
+  J->setZero(values_[kind].size(), problem_.mechanism().num_coordinates());
+  for (const Item& it : items_[kind]) {
+    if (it.block_a >= 0)
+      J->block(it.row, 7 * it.block_a, it.dim, 7) = J_a_[kind].middleRows(it.row, it.dim);
+    // += : a term may name one body twice.
+    if (it.block_b >= 0)
+      J->block(it.row, 7 * it.block_b, it.dim, 7) += J_b_[kind].middleRows(it.row, it.dim);
   }
 }
 

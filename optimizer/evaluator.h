@@ -25,6 +25,12 @@ class ProblemEvaluator {
   explicit ProblemEvaluator(const Problem& problem, bool dense_jacobians = true);
 
   void Evaluate(const Eigen::VectorXd& q);
+  /// Evaluates the equality rows only (values, Jacobians, the dense J_e()): what a measure made
+  /// of the constraint Jacobian needs (Dexterity); the other kinds keep their last values.
+  void EvaluateEqualities(const Eigen::VectorXd& q);
+  /// *J = the kind's stacked Jacobian at the last Evaluate, dense (rows × coordinates), from the
+  /// terms' blocks.
+  void DenseJacobian(Kind kind, Eigen::MatrixXd* J) const;
 
   /// Body pairs (moving-body block indices) coupled by some term, for BlockMatrix's pattern.
   std::vector<std::pair<int, int>> CoupledBlocks() const;
@@ -97,6 +103,7 @@ class ProblemEvaluator {
   using JacobianRows = Eigen::Matrix<double, Eigen::Dynamic, 7>;
   std::array<JacobianRows, 3> J_a_, J_b_;
   std::array<Eigen::MatrixXd, 3> dense_;
+  void EvaluateKinds(const Eigen::VectorXd& q, int first, int last);
   std::vector<Eigen::Matrix3d> rotation_weights_;  // per moving block
   bool rotations_pending_ = false;
 };

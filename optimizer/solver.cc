@@ -39,6 +39,7 @@ Solver::Solver(const Problem& problem, const SolverOptions& options)
   g_.setZero(n_);
   step_.setZero(n_);
   q_try_.setZero(n_);
+  objective_q_.setZero(n_);
   q_best_.setZero(n_);
   q_start_.setZero(n_);
   lambda_e_start_.setZero(problem.num_equality_rows());
@@ -132,17 +133,14 @@ void Solver::UpdateDesignCurvature(const Eigen::VectorXd& q) {
 }
 
 Eigen::MatrixXd Solver::DenseConstraintJacobian() const {
-  // Assembled column by column from the evaluator's Jacobian products.
+  // Assembled from the terms' blocks (it used to be column by column from Jacobian products:
+  // n passes over every term).
   const int me = ev_.c_e().size(), mi = ev_.c_i().size();
-  Eigen::MatrixXd J(me + mi, n_);
-  Eigen::VectorXd e = Eigen::VectorXd::Zero(n_), ce(me), ci(mi);
-  for (int k = 0; k < n_; ++k) {
-    e[k] = 1.0;
-    ev_.JacobianTimes(ProblemEvaluator::kEquality, e, &ce);
-    ev_.JacobianTimes(ProblemEvaluator::kInequality, e, &ci);
-    J.col(k) << ce, ci;
-    e[k] = 0.0;
-  }
+  Eigen::MatrixXd J(me + mi, n_), part;
+  ev_.DenseJacobian(ProblemEvaluator::kEquality, &part);
+  J.topRows(me) = part;
+  ev_.DenseJacobian(ProblemEvaluator::kInequality, &part);
+  J.bottomRows(mi) = part;
   return J;
 }
 
@@ -228,8 +226,16 @@ void Solver::DesignCurvatureByDifferences(const Eigen::VectorXd& q) {
   B_.noalias() = Z * reduced * Z.transpose();
 }
 
-double Solver::Lagrangian(const Eigen::VectorXd& q) const {
-  return ev_.Objective(q, q_prev_, M_) - lambda_e_.dot(ev_.c_e()) - lambda_i_.dot(ev_.c_i());
+double Solver::Lagrangian(const Eigen::VectorXd& q) {
+  return ObjectiveAt(q) - lambda_e_.dot(ev_.c_e()) - lambda_i_.dot(ev_.c_i());
+}
+
+double Solver::ObjectiveAt(const Eigen::VectorXd& q) {
+  if (objective_known_ && q == objective_q_) return objective_value_;
+  objective_value_ = ev_.Objective(q, q_prev_, M_);
+  objective_q_ = q;  // (sized at construction: no allocation)
+  objective_known_ = true;
+  return objective_value_;
 }
 
 void Solver::AugmentedGradient() {
@@ -418,6 +424,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
   if (!q.allFinite()) return InvalidInput(&q, SolveStats{});
   q_prev_ = q;
   problem_.mechanism().MetricBlocks(q_prev_, &M_);
+  objective_known_ = false;  // (E depends on q_prev_ through least astonishment)
   SolveStats st;
   ev_.Evaluate(q);
   // Primal-dual augmented Lagrangian (stabilized SQP): Newton on
@@ -437,9 +444,9 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
       if (st.iterations == 0) {
         // The objective's scale: its gradient at the start, or its value where the start is
         // stationary.
-        kkt_tolerance = options_.design.relative_kkt_tolerance *
-                        std::max({MaxAbs(grad_e_), std::abs(ev_.Objective(q, q_prev_, M_)),
-                                  options_.design.kkt_floor});
+        kkt_tolerance =
+            options_.design.relative_kkt_tolerance *
+            std::max({MaxAbs(grad_e_), std::abs(ObjectiveAt(q)), options_.design.kkt_floor});
         // (A feasible cold start only: away from the constraints the least-squares balance
         // says nothing about the multipliers at the solution — measured, the arm on a plane
         // from a start 9 cm off it was led to a pose of zero dexterity.)
@@ -477,8 +484,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
       if (fd_curvature_) DesignCurvatureByDifferences(q);
     }
     if (history_) {
-      history_->push_back(
-          {st.iterations, ev_.Objective(q, q_prev_, M_), st.max_violation, st.kkt_residual});
+      history_->push_back({st.iterations, ObjectiveAt(q), st.max_violation, st.kkt_residual});
     }
     if (!std::isfinite(st.max_violation) || !std::isfinite(st.kkt_residual)) {
       // At the start this is the input (a non-finite goal target, or a term that cannot be
@@ -602,7 +608,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     failed.iterations = st.iterations;
     return failed;
   }
-  st.objective = ev_.Objective(q, q_prev_, M_);
+  st.objective = ObjectiveAt(q);
   st.penalty = mu_;
   if (options_.second_order_check) SecondOrderCheck(q, &st);
   return st;

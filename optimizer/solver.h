@@ -167,7 +167,11 @@ class Solver {
   /// by forward differences of the design gradient at q.
   void DesignCurvatureByDifferences(const Eigen::VectorXd& q);
   /// The Lagrangian E − λ_Eᵀc_E − λ_Iᵀc_I at the last Evaluate (design mode's line search).
-  double Lagrangian(const Eigen::VectorXd& q) const;
+  double Lagrangian(const Eigen::VectorXd& q);
+  /// E(q), remembered for the last q it was computed at (within a solve): the line search's
+  /// accepted point is the next iterate, whose objective the history, the tolerance and the
+  /// next line search all ask for again (a design objective's value costs a factorization).
+  double ObjectiveAt(const Eigen::VectorXd& q);
 
   const Problem& problem_;
   SolverOptions options_;
@@ -176,6 +180,9 @@ class Solver {
   BlockMatrix H_;
   std::vector<Matrix7d> M_;
   Eigen::VectorXd q_prev_, lambda_e_, lambda_i_, g_, step_, q_try_, q_best_, shifted_;
+  Eigen::VectorXd objective_q_;  ///< where objective_value_ was computed (ObjectiveAt)
+  double objective_value_ = 0.0;
+  bool objective_known_ = false;
   // The solve's start and its best iterate's multipliers (undo a non-finite solve).
   Eigen::VectorXd q_start_, lambda_e_start_, lambda_i_start_, lambda_e_best_, lambda_i_best_;
   Eigen::VectorXd weights_, gn_e_, gn_i_, gn_o_, kkt_, grad_e_, linearized_e_, linearized_i_,
