@@ -34,6 +34,29 @@ SurfaceSurfaceExtremum Face(const nurbs::NurbsSurface& plate, const nurbs::Nurbs
                              Eigen::Vector4d(c.x() / (40 * mm), c.y() / (40 * mm), 0.5, 0.05));
 }
 
+/// A 40 mm plate (the plane z = 0) with a round hole 10 mm across at (20, 20) mm, and a 4 mm
+/// ball held 0.05 mm from the rim with its centre 2.5 mm from the hole's axis.
+struct RoundHole {
+  const nurbs::NurbsSurface plate =
+      nurbs::MakePlanePatch({0, 0, 0}, {40 * mm, 0, 0}, {0, 40 * mm, 0});
+  const nurbs::TrimmedDomain trim{
+      {0, 0},
+      {1, 1},
+      std::nullopt,
+      {nurbs::TrimLoop{{nurbs::MakeCircle2d({0.5, 0.5}, 0.125, true)}}}};
+  const TrimEdges edges{&plate, &trim};
+  const nurbs::NurbsSurface ball = nurbs::MakeSphere({0, 0, 0}, 4 * mm);
+  const double z = std::sqrt(4.05 * 4.05 - 2.5 * 2.5) * mm;
+
+  /// The rim measured with the ball's centre at angle `a` round the hole's axis.
+  TrimmedMeasure Measure(double a, const TrimEdges::Edge* from = nullptr) const {
+    const BodyPose pose =
+        At({20 * mm + 2.5 * mm * std::cos(a), 20 * mm + 2.5 * mm * std::sin(a), z});
+    return MeasureTrimmed(edges, At(Eigen::Vector3d::Zero()), ball, pose, Face(plate, ball, pose),
+                          from);
+  }
+};
+
 TEST(TrimmedTest, ACornerOfTheLoopIsAContact) {
   const nurbs::NurbsSurface plate =
       nurbs::MakePlanePatch({0, 0, 0}, {40 * mm, 0, 0}, {0, 40 * mm, 0});
@@ -57,25 +80,14 @@ TEST(TrimmedTest, ACornerOfTheLoopIsAContact) {
 }
 
 TEST(TrimmedTest, ARoundRimIsMeasuredThroughItsQuarterPoints) {
-  const nurbs::NurbsSurface plate =
-      nurbs::MakePlanePatch({0, 0, 0}, {40 * mm, 0, 0}, {0, 40 * mm, 0});
-  const nurbs::TrimmedDomain trim(
-      {0, 0}, {1, 1}, std::nullopt,
-      {nurbs::TrimLoop{{nurbs::MakeCircle2d({0.5, 0.5}, 0.125, true)}}});
-  const TrimEdges edges(&plate, &trim);
-  const nurbs::NurbsSurface ball = nurbs::MakeSphere({0, 0, 0}, 4 * mm);
-  const double z = std::sqrt(4.05 * 4.05 - 2.5 * 2.5) * mm;
+  const RoundHole hole;
   int worst_status = 0;
   double worst_beta = 0.0;
   // Round the rim in 1/720 turns, and at each quarter point ± 1e-12 rad.
   for (int k = 0; k <= 724; ++k) {
     const double a = k <= 720 ? 2 * std::numbers::pi * k / 720
                               : (k - 721) * std::numbers::pi / 2 + ((k % 2) ? 1e-12 : -1e-12);
-    const Eigen::Vector3d centre(20 * mm + 2.5 * mm * std::cos(a), 20 * mm + 2.5 * mm * std::sin(a),
-                                 z);
-    const BodyPose pose = At(centre);
-    const TrimmedMeasure m =
-        MeasureTrimmed(edges, At(Eigen::Vector3d::Zero()), ball, pose, Face(plate, ball, pose));
+    const TrimmedMeasure m = hole.Measure(a);
     ASSERT_TRUE(m.on_edge) << k;
     worst_status = std::max(worst_status, static_cast<int>(m.status));
     worst_beta = std::max(worst_beta, std::abs(m.beta - 0.05 * mm));
@@ -85,12 +97,8 @@ TEST(TrimmedTest, ARoundRimIsMeasuredThroughItsQuarterPoints) {
 }
 
 TEST(TrimmedTest, ACircleIsOnePeriodicPieceFollowedAcrossItsClosure) {
-  const nurbs::NurbsSurface plate =
-      nurbs::MakePlanePatch({0, 0, 0}, {40 * mm, 0, 0}, {0, 40 * mm, 0});
-  const nurbs::TrimmedDomain trim(
-      {0, 0}, {1, 1}, std::nullopt,
-      {nurbs::TrimLoop{{nurbs::MakeCircle2d({0.5, 0.5}, 0.125, true)}}});
-  const TrimEdges edges(&plate, &trim);
+  const RoundHole hole;
+  const TrimEdges& edges = hole.edges;
   ASSERT_EQ(edges.loops().size(), 1u);
   ASSERT_EQ(edges.loops()[0].size(), 1u);  // its quarter points' full knots are C¹: not cut
   EXPECT_TRUE(edges.loops()[0][0].periodic);
@@ -99,25 +107,19 @@ TEST(TrimmedTest, ACircleIsOnePeriodicPieceFollowedAcrossItsClosure) {
       {0, 0}, {1, 1}, std::nullopt,
       {nurbs::TrimLoop{
           {nurbs::MakePolyline2d({{0.3, 0.3}, {0.3, 0.7}, {0.7, 0.7}, {0.7, 0.3}, {0.3, 0.3}})}}});
-  const TrimEdges square_edges(&plate, &square);
+  const TrimEdges square_edges(&hole.plate, &square);
   ASSERT_EQ(square_edges.loops()[0].size(), 4u);
   EXPECT_FALSE(square_edges.loops()[0][0].periodic);
 
   // The ball slides along the rim through the circle's closure (angle 0: τ = 0 ≡ 1), each
   // measure following the last edge: it stays on the one piece, never held at a bound, and
   // each solve converges in a few Newton steps.
-  const nurbs::NurbsSurface ball = nurbs::MakeSphere({0, 0, 0}, 4 * mm);
-  const double z = std::sqrt(4.05 * 4.05 - 2.5 * 2.5) * mm;
   TrimEdges::Edge last;
   bool have_last = false;
   int most_iterations = 0;
   double worst_beta = 0.0;
   for (int k = -20; k <= 20; ++k) {
-    const double a = 1e-3 * k;
-    const BodyPose pose =
-        At({20 * mm + 2.5 * mm * std::cos(a), 20 * mm + 2.5 * mm * std::sin(a), z});
-    const TrimmedMeasure m = MeasureTrimmed(edges, At(Eigen::Vector3d::Zero()), ball, pose,
-                                            Face(plate, ball, pose), have_last ? &last : nullptr);
+    const TrimmedMeasure m = hole.Measure(1e-3 * k, have_last ? &last : nullptr);
     ASSERT_TRUE(m.on_edge) << k;
     EXPECT_EQ(m.status, ExtremalStatus::kConverged) << k;
     EXPECT_FALSE(m.edge.ext.at_bound[2]) << k;
