@@ -68,18 +68,23 @@ std::unique_ptr<server::Scene> Replicate(ConfigurationsSpec* c) {
   s.path = base.path;
   c->bodies.assign(static_cast<size_t>(K),
                    std::vector<int>(static_cast<size_t>(mech.num_bodies())));
-  for (int b = 0; b < mech.num_bodies(); ++b) {  // the shared bodies first
-    if (!shared(b)) continue;
-    const int r = s.mechanism.AddBody(mech.body(b));
-    for (int k = 0; k < K; ++k) c->bodies[static_cast<size_t>(k)][static_cast<size_t>(b)] = r;
-  }
-  for (int k = 0; k < K; ++k) {  // then each copy's, in order
+  // Each copy's bodies first, in order, then the shared ones: the Newton matrix is then block
+  // diagonal with a border (an arrow), which the sparse solver's natural ordering factorizes
+  // without fill. (Shared bodies first, every copy couples through them on the first pivots and
+  // the factor filled in completely: measured, 463k instructions per factorization of the
+  // four-bar at seven angles, 44 % of its run in the starts' settling solves.)
+  for (int k = 0; k < K; ++k) {
     for (int b = 0; b < mech.num_bodies(); ++b) {
       if (shared(b)) continue;
       optimizer::Body copy = mech.body(b);
       copy.name += "@" + std::to_string(k + 1);
       c->bodies[static_cast<size_t>(k)][static_cast<size_t>(b)] = s.mechanism.AddBody(copy);
     }
+  }
+  for (int b = 0; b < mech.num_bodies(); ++b) {
+    if (!shared(b)) continue;
+    const int r = s.mechanism.AddBody(mech.body(b));
+    for (int k = 0; k < K; ++k) c->bodies[static_cast<size_t>(k)][static_cast<size_t>(b)] = r;
   }
   c->joints.assign(static_cast<size_t>(K), std::vector<int>(base.joints.size()));
   for (size_t j = 0; j < base.joints.size(); ++j) {
