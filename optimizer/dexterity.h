@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -33,6 +34,13 @@ enum class DexterityMeasure { kDexterity, kInverseCondition, kForceTransmission 
 /// and a contraction ⟨Y, ∂R/∂q_k⟩ of stacked term rows R is column k of Σ_j H(Y_{:,j}) e_j, the
 /// terms' weighted Hessians (Term::AddWeightedHessian) — n of them per gradient. For design
 /// studies, not for the servo loop: evaluation allocates.
+///
+/// Each thread keeps the last few points it evaluated (the evaluators there, B's factorization,
+/// S and the SVD of J), so that a gradient asked at a point whose value was just asked (a line
+/// search's accepted step, then the next iteration's gradient) does not factor B again. The
+/// measures are a pure function of q (every point is evaluated by fresh evaluators, no warm
+/// start carries over), so a point found there gives the same bits as evaluating it again:
+/// results do not depend on what a thread evaluated before.
 class Dexterity {
  public:
   struct Measures {
@@ -56,6 +64,11 @@ class Dexterity {
   static constexpr int kAllGradients = 7;
 
  private:
+  struct Point;
+  /// The evaluation at q without gradients: from this thread's recent points, else made there.
+  const Point& At(const Eigen::VectorXd& q) const;
+
+  std::uint64_t id_;  ///< names this instance in the threads' point caches (addresses recur)
   const Problem& problem_;
   Problem aux_;  ///< unit quaternions, then X (3 rows), then one angle row per chosen joint
   int x_row_ = 0, a_row_ = 0, m_ = 0;

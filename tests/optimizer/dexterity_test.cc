@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <thread>
 
 #include "optimizer/solver.h"
 #include "testing/fourbar.h"
@@ -102,6 +103,47 @@ TEST(DexterityTest, DesignStudyClimbsTheDexterity) {
   }
   std::printf("design study: dexterity %.5f -> %.5f m^3 in 30 solves\n", first, before);
   EXPECT_GT(before, first * 1.02);
+}
+
+void ExpectSameBits(const Dexterity::Measures& a, const Dexterity::Measures& b) {
+  EXPECT_EQ(a.J, b.J);
+  EXPECT_EQ(a.dexterity, b.dexterity);
+  EXPECT_EQ(a.inverse_condition, b.inverse_condition);
+  EXPECT_EQ(a.force_transmission, b.force_transmission);
+  EXPECT_EQ(a.grad_dexterity, b.grad_dexterity);
+  EXPECT_EQ(a.grad_inverse_condition, b.grad_inverse_condition);
+  EXPECT_EQ(a.grad_force_transmission, b.grad_force_transmission);
+}
+
+TEST(DexterityTest, RecentPointsGiveTheSameBitsAsAFreshEvaluation) {
+  // Each thread keeps its last points (value, then gradient at the same q: one factorization).
+  // What comes from there must be what a fresh evaluation gives, whatever was evaluated before,
+  // on whichever thread, and never another instance's point.
+  ThreeLink arm;
+  const Problem p = arm.MakeProblem();
+  auto fresh = [&](const Eigen::VectorXd& q) {
+    const Dexterity e(p, arm.tip, arm.joints);  // a new instance: nothing recent
+    return e.Evaluate(q, true);
+  };
+  const Dexterity d(p, arm.tip, arm.joints);
+  const Eigen::VectorXd q0 = Bent(arm);
+  const Dexterity::Measures reference = fresh(q0);
+  EXPECT_GT(d.Evaluate(q0, false).dexterity, 0.0);
+  ExpectSameBits(d.Evaluate(q0, true), reference);  // the value's point, reused
+  for (int k = 0; k < 40; ++k) {                    // more points than a thread keeps
+    d.Evaluate(Bent(arm, Eigen::Vector3d(0.3 + 0.01 * k, 0.7, -0.4 - 0.005 * k)), true);
+  }
+  ExpectSameBits(d.Evaluate(q0, true), reference);  // evaluated again
+  Dexterity::Measures on_thread;
+  std::thread([&] { on_thread = d.Evaluate(q0, true); }).join();
+  ExpectSameBits(on_thread, reference);
+  // Another instance at the same q (another end effector) has its own measures.
+  Attachment elsewhere = arm.tip;
+  elsewhere.point += Eigen::Vector3d(0.0, 0.0, 0.1);
+  const Dexterity other(p, elsewhere, arm.joints);
+  d.Evaluate(q0, false);
+  EXPECT_NE(other.Evaluate(q0, false).dexterity, reference.dexterity);
+  ExpectSameBits(d.Evaluate(q0, true), reference);
 }
 
 TEST(DexterityTest, BadInputIsRejectedWithAMessage) {
