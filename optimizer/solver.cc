@@ -1,5 +1,6 @@
 #include "optimizer/solver.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/QR>
@@ -70,10 +71,12 @@ Solver::Solver(const Problem& problem, const SolverOptions& options)
   }
   if (H_.is_sparse()) {
     ldlt_.analyzePattern(H_.sparse());  // The structure is fixed: analysed once.
-  } else {
-    // Sizes the factorization's storage (later computes reuse it). Not LLT(n_) assigned: that
-    // constructor leaves its status uninitialized and the move copies it (UBSan: "not a valid
-    // value for type ComputationInfo").
+  } else if (!options.design.enabled) {
+    // Sizes the factorization's storage (later computes reuse it: the servo's solves allocate
+    // nothing). Not LLT(n_) assigned: that constructor leaves its status uninitialized and the
+    // move copies it (UBSan: "not a valid value for type ComputationInfo"). Design solves
+    // allocate anyway, and there this n³/3 factorization of the identity was 4 % of a four-bar
+    // solve's instructions.
     llt_.compute(Eigen::MatrixXd::Identity(n_, n_));
   }
   Reset();
@@ -118,8 +121,8 @@ void Solver::UpdateDesignCurvature(const Eigen::VectorXd& q) {
       const Eigen::VectorXd r = theta * y + (1.0 - theta) * Bs;
       const double sr = s.dot(r);
       if (sBs > 0.0 && sr > 0.0) {
-        B_.noalias() -= (Bs * Bs.transpose()) / sBs;
-        B_.noalias() += (r * r.transpose()) / sr;
+        B_.noalias() -= (1.0 / sBs) * Bs * Bs.transpose();
+        B_.noalias() += (1.0 / sr) * r * r.transpose();
       }
     }
   } else if (B_.isZero(0.0)) {
@@ -146,7 +149,10 @@ Eigen::MatrixXd Solver::DenseConstraintJacobian() const {
 
 void Solver::LeastSquaresMultipliers() {
   // min |∇E − J_Aᵀλ_A|² over the equalities and the inequalities within the constraint
-  // tolerance of their bound (rank-revealing: redundant rows get the minimum-norm share). An
+  // tolerance of their bound, by the normal equations J_A J_Aᵀ λ = J_A ∇E with a relative 1e-12
+  // on the diagonal: redundant rows get a regularized, near minimum-norm share. (A start only:
+  // the solve refines the multipliers. It was a complete orthogonal decomposition of J_Aᵀ,
+  // whose Householder updates were 15 % of the four-bar at seven angles.) An
   // inequality that comes out pulling (λ < 0) is not held by its bound: dropped, and solved
   // again. (Measured: a design start at the optimum, on a length bound, took 28 iterations from
   // λ = 0 while the bound's multiplier built up through the penalty.)
@@ -158,10 +164,16 @@ void Solver::LeastSquaresMultipliers() {
     if (ev_.c_i()[i] <= options_.constraint_tolerance) rows.push_back(me + i);
   }
   Eigen::VectorXd lambda;
+  Eigen::MatrixXd JJt;
   for (int round = 0; round <= mi; ++round) {
-    Eigen::MatrixXd Jt(n_, static_cast<Eigen::Index>(rows.size()));
-    for (size_t r = 0; r < rows.size(); ++r) Jt.col(static_cast<Eigen::Index>(r)) = J.row(rows[r]);
-    lambda = Jt.completeOrthogonalDecomposition().solve(grad_e_);
+    const Eigen::Index k = static_cast<Eigen::Index>(rows.size());
+    Eigen::MatrixXd JA(k, n_);
+    for (Eigen::Index r = 0; r < k; ++r) JA.row(r) = J.row(rows[static_cast<size_t>(r)]);
+    JJt.setZero(k, k);
+    JJt.selfadjointView<Eigen::Lower>().rankUpdate(JA);
+    const double scale = k ? JJt.diagonal().maxCoeff() : 0.0;
+    JJt.diagonal().array() += 1e-12 * scale + 1e-300;
+    lambda = JJt.selfadjointView<Eigen::Lower>().ldlt().solve(JA * grad_e_);
     std::vector<int> kept;
     for (size_t r = 0; r < rows.size(); ++r) {
       if (rows[r] < me || lambda[static_cast<Eigen::Index>(r)] >= 0.0) kept.push_back(rows[r]);
