@@ -7,7 +7,7 @@
 //  2. A sweep of --sweep seeded random starts of the finger run on 1 and on 2 threads (one shared
 //     problem): wall time and speed-up, and whether the results are identical.
 //
-// Usage: design_bench [--reps N] [--sweep N] [--scenes DIR]
+// Usage: design_bench [--reps N] [--sweep N] [--scenes DIR] [--only RUN.json] (--sweep 0: none)
 
 #include <algorithm>
 #include <chrono>
@@ -90,11 +90,15 @@ Row Compare(const std::string& path, int reps) {
 
 int main(int argc, char** argv) {
   int reps = 5, sweep = 64;
-  std::string scenes = TANGENT_SCENES_DIR;
+  std::string scenes = TANGENT_SCENES_DIR, only;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--reps")) reps = std::max(1, std::atoi(argv[i + 1]));
-    if (!std::strcmp(argv[i], "--sweep")) sweep = std::max(2, std::atoi(argv[i + 1]));
+    if (!std::strcmp(argv[i], "--sweep")) {
+      sweep = std::atoi(argv[i + 1]);
+      if (sweep != 0) sweep = std::max(2, sweep);
+    }
     if (!std::strcmp(argv[i], "--scenes")) scenes = argv[i + 1];
+    if (!std::strcmp(argv[i], "--only")) only = argv[i + 1];
   }
   std::printf("Design solves against IPOPT (same process, same starts; median of %d reps):\n",
               reps);
@@ -103,12 +107,14 @@ int main(int argc, char** argv) {
   for (const char* run :
        {"three_link_finger.run.json", "fourbar_dexterity.run.json",
         "three_link_finger_design.run.json", "fourbar_force_transmission.run.json"}) {
+    if (!only.empty() && only != run) continue;
     const Row r = Compare(scenes + "/" + run, reps);
     std::printf("%-36s %6d %8d %8d %6d %10.2f %10.2f %7.2fx\n", r.run.c_str(), r.cases,
                 r.ours_optima, r.ipopt_solved, r.same, r.ours_ms, r.ipopt_ms,
                 r.ipopt_ms / std::max(r.ours_ms, 1e-9));
   }
 
+  if (sweep == 0) return 0;
   // The sweep: the finger run with `sweep` random starts, on 1 and 2 threads.
   char text[1536];
   std::snprintf(text, sizeof(text), R"({
