@@ -17,12 +17,14 @@
 #include <Geom_Surface.hxx>
 #include <IFSelect_ReturnStatus.hxx>
 #include <IGESCAFControl_Reader.hxx>
+#include <IGESControl_Controller.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <Message_Printer.hxx>
 #include <Quantity_Color.hxx>
 #include <STEPCAFControl_Reader.hxx>
+#include <STEPControl_Controller.hxx>
 #include <ShapeBuild_ReShape.hxx>
 #include <ShapeFix_Face.hxx>
 #include <ShapeFix_Shape.hxx>
@@ -231,10 +233,20 @@ ReadPart Read(const std::string& path) {
     printer->SetTraceLevel(Message_Fail);
   }
   // Lengths in metres, whatever the file's unit: Open CASCADE's unit for the shapes it makes
-  // (a process-wide setting, restored when the read is done: writers read it too).
+  // (a process-wide setting, restored when the read is done: writers read it too). The
+  // translators' parameters exist only once their controllers are initialized: in a fresh
+  // process (tangent-import, tangentd) setting the unit before that did nothing, and parts came
+  // out with millimetre numbers taken as metres (the tests' processes had initialized them by
+  // writing their fixtures first).
+  STEPControl_Controller::Init();
+  IGESControl_Controller::Init();
   struct Unit {
     std::string saved = Interface_Static::CVal("xstep.cascade.unit");
-    Unit() { Interface_Static::SetCVal("xstep.cascade.unit", "M"); }
+    Unit() {
+      if (!Interface_Static::SetCVal("xstep.cascade.unit", "M")) {
+        throw ImportError("Open CASCADE has no xstep.cascade.unit parameter to read in metres");
+      }
+    }
     ~Unit() { Interface_Static::SetCVal("xstep.cascade.unit", saved.c_str()); }
   } metres;
   // Through XCAF (the readers' document mode) so that the file's names and colours come along.

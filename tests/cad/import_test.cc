@@ -377,7 +377,19 @@ TEST(ImportTest, TangentImportWritesASceneThatLoadsWithItsTrims) {
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
   const auto s = server::LoadScene(scene);
   ASSERT_EQ(s->surfaces.size(), 26u);  // 6 planes, 12 cylinders, 8 spheres
-  for (const server::SceneSurface& f : s->surfaces) EXPECT_TRUE(f.trim.has_value()) << f.name;
+  // In metres from a fresh process too (whose translators nothing had initialized: it once
+  // wrote the box's millimetres as metres): the 40 x 30 x 20 mm box spans 0.04 m.
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = -lo;
+  for (const server::SceneSurface& f : s->surfaces) {
+    EXPECT_TRUE(f.trim.has_value()) << f.name;
+    for (int i = 0; i < f.surface.num_u(); ++i) {
+      for (int j = 0; j < f.surface.num_v(); ++j) {
+        lo = lo.cwiseMin(f.surface.point(i, j));
+        hi = hi.cwiseMax(f.surface.point(i, j));
+      }
+    }
+  }
+  EXPECT_NEAR((hi - lo).maxCoeff(), 0.040, 1e-9);
   // A file that cannot be imported: exit status 1 and the reason on stderr.
   const std::string bad =
       std::string(TANGENT_IMPORT) + " " + Dir() + "/missing.step -q 2>/dev/null";
