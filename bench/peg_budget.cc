@@ -8,6 +8,10 @@
 //
 //   ./build/bench/peg_budget [--steps 20000]   (device states; 20 s of both paths)
 //                            [--only peg|paperclips]  (one scene: for profilers such as callgrind)
+//                            [--peg-scene peg_in_hole_cad]  (the same parts imported from STEP,
+//                                                    issue 17's demo: its target is 1.5)
+//                            [--target R]            (the p99 ratio to meet; default 1, or 1.5
+//                                                    for peg_in_hole_cad)
 
 #include <chrono>
 #include <cstdio>
@@ -64,15 +68,20 @@ struct Run {
 int main(int argc, char** argv) {
   int steps = 20000;
   std::string only;  // "", "peg" or "paperclips"
+  std::string peg_scene = "peg_in_hole";
+  double target = 0.0;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--steps")) steps = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--only")) only = argv[i + 1];
+    if (!std::strcmp(argv[i], "--peg-scene")) peg_scene = argv[i + 1];
+    if (!std::strcmp(argv[i], "--target")) target = std::atof(argv[i + 1]);
   }
+  if (!(target > 0.0)) target = peg_scene == "peg_in_hole_cad" ? 1.5 : 1.0;
   std::ifstream f(std::string(TANGENT_SCENES_DIR) + "/peg_in_hole.path.csv");
   std::stringstream text;
   text << f.rdbuf();
   const HandTrajectory peg_path = HandTrajectory::FromCsv(text.str(), "peg_in_hole.path.csv");
-  Run clips("paperclips"), peg("peg_in_hole");
+  Run clips("paperclips"), peg(peg_scene);
   int64_t now = 1'000'000'000;
   for (int k = 0; k < steps; ++k) {
     const double t = 1e-3 * k;
@@ -95,7 +104,7 @@ int main(int argc, char** argv) {
     now += 1'000'000;
   }
   auto line = [](const char* name, const Run& r) {
-    std::printf("%-12s tick p50 %6.2f us  p99 %6.2f us  p99.9 %6.2f us  max violation %.1e m\n",
+    std::printf("%-16s tick p50 %6.2f us  p99 %6.2f us  p99.9 %6.2f us  max violation %.1e m\n",
                 name, Quantile(r.tick_us, 0.5), Quantile(r.tick_us, 0.99),
                 Quantile(r.tick_us, 0.999), r.max_violation);
   };
@@ -107,9 +116,9 @@ int main(int argc, char** argv) {
   std::printf("peg_budget: %d device states, 4 ticks each, both scenes in lockstep on one thread\n",
               steps);
   line("paperclips", clips);
-  line("peg_in_hole", peg);
+  line(peg_scene.c_str(), peg);
   const double ratio = Quantile(peg.tick_us, 0.99) / Quantile(clips.tick_us, 0.99);
-  std::printf("peg p99 / paperclips p99 = %.2f (target <= 1: %s)\n", ratio,
-              ratio <= 1.0 ? "met" : "NOT MET");
+  std::printf("peg p99 / paperclips p99 = %.2f (target <= %g: %s)\n", ratio, target,
+              ratio <= target ? "met" : "NOT MET");
   return 0;
 }

@@ -6,6 +6,8 @@
 
 #include "cad/import.h"
 
+#include "cad/demo_parts.h"
+
 #include "server/scene.h"
 
 #include <BRepAlgoAPI_Cut.hxx>
@@ -518,6 +520,44 @@ TEST(ImportTest, ASceneBodyTakesItsFacesFromACadFile) {
   } catch (const server::SceneError& e) {
     EXPECT_THAT(e.what(), HasSubstr("parts.json: bodies[0].cad:"));
     EXPECT_THAT(e.what(), HasSubstr("nowhere.step: no such file"));
+  }
+}
+
+}  // namespace
+}  // namespace tangent::cad
+
+namespace tangent::cad {
+namespace {
+
+// The imported-parts demo's STEP files (scenes/parts/, written by tangent-demo-parts) still
+// import to the shapes cad/demo_parts.h builds: the same faces, knots, control points (to
+// 1e-12 m) and loops. A change to the builders that is not written out fails here.
+TEST(ImportTest, TheDemoPartsAreWhatTheirGeneratorBuilds) {
+  for (const auto& [name, shape] :
+       {std::pair<std::string, TopoDS_Shape>{"peg_plate", demo::PegPlate()},
+        std::pair<std::string, TopoDS_Shape>{"peg", demo::Peg()}}) {
+    const ImportedPart kept =
+        ImportCad(std::string(TANGENT_SCENES_DIR) + "/parts/" + name + ".step");
+    const ImportedPart built = ImportCad(Write(shape, "demo_" + name, true));
+    ASSERT_EQ(kept.bodies.size(), 1u) << name;
+    ASSERT_EQ(built.bodies.size(), 1u) << name;
+    const std::vector<ImportedFace>&a = kept.bodies[0].faces, &b = built.bodies[0].faces;
+    ASSERT_EQ(a.size(), b.size()) << name;
+    EXPECT_EQ(a.size(), name == "peg" ? 4u : 8u);
+    for (size_t f = 0; f < a.size(); ++f) {
+      EXPECT_EQ(a[f].kind, b[f].kind) << name << " face " << f;
+      const nurbs::NurbsSurface &x = a[f].surface, &y = b[f].surface;
+      ASSERT_EQ(x.knots_u().knots(), y.knots_u().knots()) << name << " face " << f;
+      ASSERT_EQ(x.knots_v().knots(), y.knots_v().knots()) << name << " face " << f;
+      double worst = 0.0;
+      for (size_t i = 0; i < x.weighted_points().size(); ++i) {
+        worst = std::max(worst,
+                         (x.weighted_points()[i] - y.weighted_points()[i]).cwiseAbs().maxCoeff());
+      }
+      EXPECT_LE(worst, 1e-12) << name << " face " << f;
+      ASSERT_EQ(a[f].trim.has_value(), b[f].trim.has_value());
+      if (a[f].trim) EXPECT_EQ(a[f].trim->loops().size(), b[f].trim->loops().size());
+    }
   }
 }
 
