@@ -211,6 +211,18 @@ TrimmedDomain::TrimmedDomain(const Eigen::Vector2d& lo, const Eigen::Vector2d& h
         box.hi = box.hi.cwiseMax(x.a).cwiseMax(x.b);
         box.band = std::max(box.band, x.band);
       }
+      const Eigen::Vector2d size = box.hi - box.lo;
+      double length = 0.0;
+      bool on_sides = size.minCoeff() > 0.0;
+      for (int c : loop_chords_[static_cast<size_t>(l)]) {
+        const Chord& x = chords_[static_cast<size_t>(c)];
+        on_sides =
+            on_sides && ((x.a[0] == x.b[0] && (x.a[0] == box.lo[0] || x.a[0] == box.hi[0])) ||
+                         (x.a[1] == x.b[1] && (x.a[1] == box.lo[1] || x.a[1] == box.hi[1])));
+        length += (x.b - x.a).norm();
+      }
+      const double perimeter = 2.0 * size.sum();
+      box.rectangle = on_sides && std::abs(length - perimeter) <= 1e-12 * perimeter;
     }
   };
   auto neighbours = [&](int i, int j) {
@@ -334,7 +346,13 @@ int TrimmedDomain::Side(int loop, const Eigen::Vector2d& uv) const {
   // (the y comparisons are exact on doubles): the exact answer for the polygon of the chords'
   // double vertices, allocation free.
   // Outside the box of the polygon's vertices: outside the polygon (no predicate needed).
-  if (!loop_box_[static_cast<size_t>(loop)].Holds(uv, 0.0)) return CGAL::ON_UNBOUNDED_SIDE;
+  const LoopBox& box = loop_box_[static_cast<size_t>(loop)];
+  if (!box.Holds(uv, 0.0)) return CGAL::ON_UNBOUNDED_SIDE;
+  if (box.rectangle) {  // inside the box: on a side, or within (the polygon is the box)
+    return (uv.array() == box.lo.array()).any() || (uv.array() == box.hi.array()).any()
+               ? CGAL::ON_BOUNDARY
+               : CGAL::ON_BOUNDED_SIDE;
+  }
   const P2 p = ToP2(uv);
   int winding = 0;
   for (int c : loop_chords_[static_cast<size_t>(loop)]) {
@@ -367,22 +385,41 @@ bool TrimmedDomain::PolygonContains(const Eigen::Vector2d& uv) const {
   return true;
 }
 
-bool TrimmedDomain::Contains(const Eigen::Vector2d& uv, Closest* nearest) const {
+bool TrimmedDomain::Contains(const Eigen::Vector2d& uv, Closest* nearest, double* clearance) const {
   if (nearest) nearest->loop = -1;
+  if (clearance) *clearance = 0.0;
   if (!uv.allFinite()) return false;
   if ((uv.array() < lo_.array()).any() || (uv.array() > hi_.array()).any()) return false;
+  // A lower bound of min over chords (distance − band) and of the distance to the domain's
+  // border: how far uv may move before any of them could change the answer.
+  double clear = std::min((uv - lo_).minCoeff(), (hi_ - uv).minCoeff());
   for (int l = 0; l < static_cast<int>(loops_.size()); ++l) {
     const LoopBox& box = loop_box_[static_cast<size_t>(l)];
-    if (!box.Holds(uv, box.band)) continue;  // farther than any of its chords' bands
+    if (!box.Holds(uv, box.band)) {  // farther than any of its chords' bands
+      const Eigen::Vector2d out =
+          (box.lo - uv).cwiseMax(uv - box.hi).cwiseMax(Eigen::Vector2d::Zero());
+      clear = std::min(clear, out.norm() - box.band);
+      continue;
+    }
+    if (box.rectangle) {
+      const double sides = std::min((uv - box.lo).minCoeff(), (box.hi - uv).minCoeff());
+      if (sides > box.band) {  // inside, farther from every side than any chord's band
+        clear = std::min(clear, sides - box.band);
+        continue;
+      }
+    }
     for (int k : loop_chords_[static_cast<size_t>(l)]) {
       const Chord& c = chords_[static_cast<size_t>(k)];
-      if (PointSegmentDistance(uv, c.a, c.b) <= c.band) {
+      const double d = PointSegmentDistance(uv, c.a, c.b);
+      if (d <= c.band) {
         const Closest near = Nearest(uv);
         if (nearest) *nearest = near;
         return near.signed_distance >= 0.0;
       }
+      clear = std::min(clear, d - c.band);
     }
   }
+  if (clearance) *clearance = std::max(0.0, clear);
   return PolygonContains(uv);
 }
 

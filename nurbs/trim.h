@@ -81,8 +81,10 @@ class TrimmedDomain {
   /// filtered predicate falls back to exact arithmetic on a point within rounding of a chord.
   bool Contains(const Eigen::Vector2d& uv) const { return Contains(uv, nullptr); }
   /// Same; when the answer needed the closest loop point (uv within a chord's band), it is left
-  /// in *nearest (may be null), else nearest->loop is −1.
-  bool Contains(const Eigen::Vector2d& uv, Closest* nearest) const;
+  /// in *nearest (may be null), else nearest->loop is −1. *clearance (may be null): how far uv
+  /// may move (parameter units, Euclidean) with the same answer — farther than every chord's
+  /// band and inside the domain, the polygon's verdict cannot change; 0 when uv is within a band.
+  bool Contains(const Eigen::Vector2d& uv, Closest* nearest, double* clearance = nullptr) const;
   /// The closest point of the loops to (u, v) and the signed distance to it.
   Closest Nearest(const Eigen::Vector2d& uv) const;
   /// Whether the parameter rectangle [lo, hi] may hold material: false only when it certainly
@@ -120,6 +122,10 @@ class TrimmedDomain {
   struct LoopBox {
     Eigen::Vector2d lo, hi;
     double band = 0.0;
+    /// The loop's polygon is its box, traversed once (every chord on one of its sides, their
+    /// lengths its perimeter): a CAD face's loop round its whole domain. Side and the band test
+    /// are then four comparisons, not a pass over the chords.
+    bool rectangle = false;
     bool Holds(const Eigen::Vector2d& x, double grow) const {
       return (x.array() >= lo.array() - grow).all() && (x.array() <= hi.array() + grow).all();
     }

@@ -71,6 +71,56 @@ TEST(TrimTest, ACircularHoleIsClassifiedExactlyOn100kPoints) {
   EXPECT_EQ(disagreements, 0);
 }
 
+// A CAD face's outer loop runs round its whole parameter domain (here with one side in two
+// pieces): the loop's polygon is its box, classified by comparisons instead of its chords. The
+// answers must be the chords' own, at the sides and at the hole alike, and the same everywhere
+// within the clearance handed back.
+TEST(TrimTest, AnOuterLoopRoundTheWholeDomainIsClassifiedExactly) {
+  const V c(0.43, 0.52);
+  const double r = 0.21;
+  const TrimmedDomain d(
+      kLo, kHi,
+      Loop({Polyline({V(0, 0), V(0.5, 0), V(1, 0), V(1, 1), V(0, 1), V(0, 0.5), V(0, 0)})}),
+      {Loop({Circle(c, r, true)})});
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int disagreements = 0, checked = 0, near_sides = 0, with_clearance = 0, moved_disagreements = 0;
+  for (int i = 0; i < 100000; ++i) {
+    V p(unit(rng), unit(rng));
+    if (i % 2 == 1) {  // 10^-13 .. 10^-2 from a side, either way
+      const double off = std::pow(10.0, -13.0 + 11.0 * unit(rng)) * (unit(rng) < 0.5 ? -1 : 1);
+      const int side = static_cast<int>(4 * unit(rng));
+      p[side % 2] = side < 2 ? off : 1.0 - off;
+      near_sides += std::abs(off) < 1e-4;
+    }
+    const double to_sides = std::min({p.x(), 1.0 - p.x(), p.y(), 1.0 - p.y()});
+    const double exact = std::min(to_sides, (p - c).norm() - r);
+    if (std::abs(exact) <= 1e-12) continue;
+    ++checked;
+    TrimmedDomain::Closest nearest;
+    const bool in = d.Contains(p, &nearest);
+    disagreements += in != (exact > 0.0);
+    EXPECT_EQ(in, d.Contains(p));
+    if (nearest.loop >= 0) EXPECT_EQ(nearest.signed_distance, d.Nearest(p).signed_distance);
+    // Within the clearance it hands back, every point has the same answer (the servo's trimmed
+    // contacts skip the classification there).
+    double clearance = -1.0;
+    EXPECT_EQ(d.Contains(p, nullptr, &clearance), in);
+    EXPECT_GE(clearance, 0.0);
+    if (clearance > 0.0) {
+      ++with_clearance;
+      EXPECT_LE(clearance, std::abs(exact) + 1e-12);  // never past the loops or the border
+      const double angle = 2 * M_PI * unit(rng);
+      const V q = p + 0.999 * clearance * V(std::cos(angle), std::sin(angle));
+      moved_disagreements += d.Contains(q) != in;
+    }
+  }
+  EXPECT_GT(with_clearance, 40000);
+  EXPECT_EQ(moved_disagreements, 0);
+  EXPECT_GT(near_sides, 20000);
+  EXPECT_EQ(disagreements, 0) << checked << " points checked";
+}
+
 TEST(TrimTest, SignedDistanceAndClosestPointMatchTheCircle) {
   const V c(0.5, 0.5);
   const double r = 0.2;
