@@ -105,11 +105,20 @@ void TrimEdges::Solve(const nurbs::NurbsSurface& g, const BodyPose& pose_g, cons
 
 TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
                               const nurbs::NurbsSurface& g, const BodyPose& pose_g,
-                              const SurfaceSurfaceExtremum& face, const TrimEdges::Edge* from) {
+                              const SurfaceSurfaceExtremum& face, const TrimEdges::Edge* from,
+                              MaterialMemo* memo) {
   TrimmedMeasure m;
   const Eigen::Vector2d uv = face.u.head<2>();
   nurbs::TrimmedDomain::Closest near;
-  if (edges.trim().Contains(uv, &near)) {
+  // On the material when within the remembered clearance of a point that was (exactly the
+  // classification's own answer there: no chord's band and no border is nearer).
+  bool material = memo && memo->clearance > 0.0 && (uv - memo->uv).norm() < memo->clearance;
+  if (!material) {
+    double clearance = 0.0;
+    material = edges.trim().Contains(uv, &near, &clearance);
+    if (memo) *memo = {uv, material ? clearance : 0.0};
+  }
+  if (material) {
     m.beta = face.beta;
     m.p_f = face.p_f;
     m.p_g = face.p_g;

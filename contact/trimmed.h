@@ -84,9 +84,17 @@ struct TrimmedMeasure {
   Eigen::Vector3d p_f = Eigen::Vector3d::Zero(), p_g = Eigen::Vector3d::Zero();
   ExtremalStatus status = ExtremalStatus::kNotConverged;
 };
+/// The last face point a measure found on the material, and how far (parameter units) it may
+/// move with that answer (nurbs::TrimmedDomain::Contains' clearance). Per-solve data: the
+/// evaluations of a tracked contact move it by far less, and skip the classification.
+struct MaterialMemo {
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();
+  double clearance = 0.0;  ///< 0: nothing remembered
+};
+/// `memo` (may be null): read and updated; the answer is the same with or without it.
 TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
                               const nurbs::NurbsSurface& g, const BodyPose& pose_g,
                               const SurfaceSurfaceExtremum& face,
-                              const TrimEdges::Edge* from = nullptr);
+                              const TrimEdges::Edge* from = nullptr, MaterialMemo* memo = nullptr);
 
 }  // namespace tangent::contact

@@ -161,7 +161,7 @@ void TrimmedContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   // edge (contact::MeasureTrimmed), else started at the loop point nearest the face's.
   const bool was_on_edge = st->on_edge;
   const contact::TrimmedMeasure m = contact::MeasureTrimmed(
-      edges_, pa, *g_, pb, face.ext, was_on_edge && st->valid ? &st->edge : nullptr);
+      edges_, pa, *g_, pb, face.ext, was_on_edge && st->valid ? &st->edge : nullptr, &st->material);
   st->on_edge = m.on_edge;
   st->reported = face.ext;
   if (st->on_edge) {

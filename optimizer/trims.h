@@ -105,6 +105,7 @@ class TrimmedContactTerm final : public Term {
     contact::TrimEdges::Edge edge;          ///< the edge contact followed while on_edge
     bool on_edge = false;                   ///< the last evaluation measured the edge
     int64_t switches = 0;                   ///< face → edge and edge → face changes
+    contact::MaterialMemo material;         ///< the last face point found on the material
     Vector7d q_a, q_b;
     bool valid = false;
     contact::CurveSurfaceEval edge_eval;
