@@ -556,7 +556,9 @@ TEST(ImportTest, TheDemoPartsAreWhatTheirGeneratorBuilds) {
       }
       EXPECT_LE(worst, 1e-12) << name << " face " << f;
       ASSERT_EQ(a[f].trim.has_value(), b[f].trim.has_value());
-      if (a[f].trim) EXPECT_EQ(a[f].trim->loops().size(), b[f].trim->loops().size());
+      if (a[f].trim) {
+        EXPECT_EQ(a[f].trim->loops().size(), b[f].trim->loops().size());
+      }
     }
   }
 }

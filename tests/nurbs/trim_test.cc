@@ -101,7 +101,9 @@ TEST(TrimTest, AnOuterLoopRoundTheWholeDomainIsClassifiedExactly) {
     const bool in = d.Contains(p, &nearest);
     disagreements += in != (exact > 0.0);
     EXPECT_EQ(in, d.Contains(p));
-    if (nearest.loop >= 0) EXPECT_EQ(nearest.signed_distance, d.Nearest(p).signed_distance);
+    if (nearest.loop >= 0) {
+      EXPECT_EQ(nearest.signed_distance, d.Nearest(p).signed_distance);
+    }
     // Within the clearance it hands back, every point has the same answer (the servo's trimmed
     // contacts skip the classification there).
     double clearance = -1.0;

@@ -13,6 +13,7 @@
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -182,21 +183,22 @@ TEST_P(PegInHoleTest, ThePegMeetsTheRimAsAnEdgeDropsInAndSlidesOnTheWall) {
   EXPECT_EQ(run.allocations, 0);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenes, PegInHoleTest,
-                         ::testing::Values(PegScene{"peg_in_hole.json", "plate_top", "hole_wall",
-                                                    "hole_floor", "peg_crown"}
+std::vector<PegScene> Scenes() {
+  std::vector<PegScene> out = {
+      {"peg_in_hole.json", "plate_top", "hole_wall", "hole_floor", "peg_crown"}};
 #ifdef TANGENT_WITH_CAD
-                                           ,
-                                           PegScene{"peg_in_hole_cad.json", "plate/solid 0 face 2",
-                                                    "plate/solid 0 face 6", "plate/solid 0 face 7",
-                                                    "peg/solid 0 face 2"}
+  out.push_back({"peg_in_hole_cad.json", "plate/solid 0 face 2", "plate/solid 0 face 6",
+                 "plate/solid 0 face 7", "peg/solid 0 face 2"});
 #endif
-                                           ),
-                         [](const ::testing::TestParamInfo<PegScene>& info) {
-                           return std::string(info.param.file).find("cad") != std::string::npos
-                                      ? "ImportedParts"
-                                      : "Primitives";
-                         });
+  return out;
+}
+
+std::string SceneName(const ::testing::TestParamInfo<PegScene>& p) {
+  return std::string(p.param.file).find("cad") != std::string::npos ? "ImportedParts"
+                                                                    : "Primitives";
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, PegInHoleTest, ::testing::ValuesIn(Scenes()), SceneName);
 
 }  // namespace
 }  // namespace tangent::server
