@@ -113,9 +113,10 @@ TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
   // On the material when within the remembered clearance of a point that was (exactly the
   // classification's own answer there: no chord's band and no border is nearer).
   bool material = memo && memo->clearance > 0.0 && (uv - memo->uv).norm() < memo->clearance;
+  int excluded_by = -1;
   if (!material) {
     double clearance = 0.0;
-    material = edges.trim().Contains(uv, &near, &clearance);
+    material = edges.trim().Contains(uv, &near, &clearance, &excluded_by);
     if (memo) *memo = {uv, material ? clearance : 0.0};
   }
   if (material) {
@@ -126,10 +127,17 @@ TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
     return m;
   }
   m.on_edge = true;
-  // The edge followed stays on its loop while that is the nearest (with one loop, always).
+  // The edge followed stays on its loop while that is the nearest: with one loop, always; a
+  // loop whose polygon excludes the point beyond every band is the nearest (any path to another
+  // loop crosses it: a CAD face's outer loop need not be searched while its hole's rim is
+  // followed); else the nearest loop point decides.
   const bool one_loop = edges.trim().loops().size() == 1;
-  if (!(from && one_loop) && near.loop < 0) near = edges.trim().Nearest(uv);
-  if (from && (one_loop || from->loop == near.loop)) {
+  bool keep = from && (one_loop || (near.loop < 0 && excluded_by == from->loop));
+  if (!keep) {
+    if (near.loop < 0) near = edges.trim().Nearest(uv);
+    keep = from && from->loop == near.loop;
+  }
+  if (keep) {
     m.edge = *from;
   } else {
     edges.StartNear(near, g, pose_g, pose_f, face.u.tail<2>(), &m.edge);

@@ -373,21 +373,24 @@ int TrimmedDomain::Side(int loop, const Eigen::Vector2d& uv) const {
   return winding != 0 ? CGAL::ON_BOUNDED_SIDE : CGAL::ON_UNBOUNDED_SIDE;
 }
 
-bool TrimmedDomain::PolygonContains(const Eigen::Vector2d& uv) const {
+bool TrimmedDomain::PolygonContains(const Eigen::Vector2d& uv, int* excluded_by) const {
   for (int l = 0; l < static_cast<int>(loops_.size()); ++l) {
     const int side = Side(l, uv);
-    if (has_outer_ && l == 0) {
-      if (side == CGAL::ON_UNBOUNDED_SIDE) return false;
-    } else if (side == CGAL::ON_BOUNDED_SIDE) {
+    const bool excluded =
+        has_outer_ && l == 0 ? side == CGAL::ON_UNBOUNDED_SIDE : side == CGAL::ON_BOUNDED_SIDE;
+    if (excluded) {
+      if (excluded_by) *excluded_by = l;
       return false;
     }
   }
   return true;
 }
 
-bool TrimmedDomain::Contains(const Eigen::Vector2d& uv, Closest* nearest, double* clearance) const {
+bool TrimmedDomain::Contains(const Eigen::Vector2d& uv, Closest* nearest, double* clearance,
+                             int* excluded_by) const {
   if (nearest) nearest->loop = -1;
   if (clearance) *clearance = 0.0;
+  if (excluded_by) *excluded_by = -1;
   if (!uv.allFinite()) return false;
   if ((uv.array() < lo_.array()).any() || (uv.array() > hi_.array()).any()) return false;
   // A lower bound of min over chords (distance − band) and of the distance to the domain's
@@ -420,7 +423,7 @@ bool TrimmedDomain::Contains(const Eigen::Vector2d& uv, Closest* nearest, double
     }
   }
   if (clearance) *clearance = std::max(0.0, clear);
-  return PolygonContains(uv);
+  return PolygonContains(uv, excluded_by);
 }
 
 TrimmedDomain::Closest TrimmedDomain::RefineOn(int loop, int curve, double t,

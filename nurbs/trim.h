@@ -84,7 +84,11 @@ class TrimmedDomain {
   /// in *nearest (may be null), else nearest->loop is −1. *clearance (may be null): how far uv
   /// may move (parameter units, Euclidean) with the same answer — farther than every chord's
   /// band and inside the domain, the polygon's verdict cannot change; 0 when uv is within a band.
-  bool Contains(const Eigen::Vector2d& uv, Closest* nearest, double* clearance = nullptr) const;
+  /// *excluded_by (may be null): off the material beyond every band, the loop whose polygon
+  /// excludes uv (inside a hole, or outside the outer loop), else −1. That loop is then the
+  /// nearest one: every path from uv to another loop crosses it.
+  bool Contains(const Eigen::Vector2d& uv, Closest* nearest, double* clearance = nullptr,
+                int* excluded_by = nullptr) const;
   /// The closest point of the loops to (u, v) and the signed distance to it.
   Closest Nearest(const Eigen::Vector2d& uv) const;
   /// Whether the parameter rectangle [lo, hi] may hold material: false only when it certainly
@@ -106,7 +110,8 @@ class TrimmedDomain {
   /// (inside, on the boundary or outside) as an int. Allocation free.
   int Side(int loop, const Eigen::Vector2d& uv) const;
   /// The polygon's verdict for a point farther than every chord's band from it.
-  bool PolygonContains(const Eigen::Vector2d& uv) const;
+  /// *excluded_by (may be null): the loop that excludes uv when the answer is false.
+  bool PolygonContains(const Eigen::Vector2d& uv, int* excluded_by = nullptr) const;
   /// Newton on curve (loop, curve) for the point closest to uv, from parameter t.
   Closest RefineOn(int loop, int curve, double t, const Eigen::Vector2d& uv) const;
   /// Whether uv lies on the material side of the loop at its closest point c.

@@ -84,7 +84,8 @@ TEST(TrimTest, AnOuterLoopRoundTheWholeDomainIsClassifiedExactly) {
       {Loop({Circle(c, r, true)})});
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  int disagreements = 0, checked = 0, near_sides = 0, with_clearance = 0, moved_disagreements = 0;
+  int disagreements = 0, checked = 0, near_sides = 0, with_clearance = 0, moved_disagreements = 0,
+      excluded = 0;
   for (int i = 0; i < 100000; ++i) {
     V p(unit(rng), unit(rng));
     if (i % 2 == 1) {  // 10^-13 .. 10^-2 from a side, either way
@@ -107,8 +108,18 @@ TEST(TrimTest, AnOuterLoopRoundTheWholeDomainIsClassifiedExactly) {
     // Within the clearance it hands back, every point has the same answer (the servo's trimmed
     // contacts skip the classification there).
     double clearance = -1.0;
-    EXPECT_EQ(d.Contains(p, nullptr, &clearance), in);
+    int excluded_by = -2;
+    EXPECT_EQ(d.Contains(p, nullptr, &clearance, &excluded_by), in);
     EXPECT_GE(clearance, 0.0);
+    // Off the material beyond every band, the loop that excludes the point is its nearest (off
+    // the domain, none does).
+    const bool in_domain = (p.array() >= kLo.array()).all() && (p.array() <= kHi.array()).all();
+    if (!in && nearest.loop < 0 && in_domain) {
+      ++excluded;
+      EXPECT_EQ(excluded_by, d.Nearest(p).loop);
+    } else {
+      EXPECT_EQ(excluded_by, -1);
+    }
     if (clearance > 0.0) {
       ++with_clearance;
       EXPECT_LE(clearance, std::abs(exact) + 1e-12);  // never past the loops or the border
@@ -118,6 +129,7 @@ TEST(TrimTest, AnOuterLoopRoundTheWholeDomainIsClassifiedExactly) {
     }
   }
   EXPECT_GT(with_clearance, 40000);
+  EXPECT_GT(excluded, 5000);
   EXPECT_EQ(moved_disagreements, 0);
   EXPECT_GT(near_sides, 20000);
   EXPECT_EQ(disagreements, 0) << checked << " points checked";
