@@ -22,12 +22,22 @@ const char* ToString(TrackStatus s) {
 
 ContactTracker::ContactTracker(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
                                const TrackerOptions& options)
-    : f_(f), g_(g), options_(options) {
+    : options_(options) {
+  Rebind(f, g);
+}
+
+void ContactTracker::Rebind(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g) {
+  f_ = &f;
+  g_ = &g;
   lo_ << f.knots_u().domain_begin(), f.knots_v().domain_begin(), g.knots_u().domain_begin(),
       g.knots_v().domain_begin();
   hi_ << f.knots_u().domain_end(), f.knots_v().domain_end(), g.knots_u().domain_end(),
       g.knots_v().domain_end();
   periodic_ = {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()};
+  hint_f_ = {};
+  hint_g_ = {};
+  u_q_.setZero();
+  status_ = TrackStatus::kLost;
 }
 
 TrackStatus ContactTracker::Reset(const Vector7d& q_f, const Vector7d& q_g,
@@ -68,7 +78,7 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
   u_ = internal::ClampOrWrap<4>(u_, lo_, hi_, periodic_);
   const BodyPose pf = BodyPose::FromCoordinates(q_f);
   const BodyPose pg = BodyPose::FromCoordinates(q_g);
-  EvaluatePair(f_, pf, g_, pg, u_, &hint_f_, &hint_g_, &eval_, /*gradient_form=*/false);
+  EvaluatePair(*f_, pf, *g_, pg, u_, &hint_f_, &hint_g_, &eval_, /*gradient_form=*/false);
   // Eigen's fixed-size 4 x 4 inverse (cofactors, vectorized) gives the corrector and the
   // determinant together, faster than an LU here; a matrix near singular is caught by the guard
   // below and by the closed form's conditioning test, so cofactor rounding is never relied on

@@ -35,12 +35,16 @@ struct TrackerOptions {
 /// Follows one extremal pair of two surfaces as the bodies move (seed 001 §3.3, design.md §2
 /// step 2): predictor u += u_q Δq, Newton correctors on the contact equations (one by default,
 /// TrackerOptions::corrector_steps), and the closed-form u_q refreshed from the last evaluation.
-/// Holds references to the surfaces (which must outlive it) and fixed-size state only: Step()
-/// allocates nothing and never throws.
+/// Holds pointers to the surfaces (which must outlive it) and fixed-size state only: Step()
+/// and Rebind() allocate nothing and never throw.
 class ContactTracker {
  public:
   ContactTracker(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
                  const TrackerOptions& options = {});
+
+  /// Follows another pair of surfaces from now on (a contact slot moved to another face pair,
+  /// optimizer/body_contacts.h): not tracking until the next Reset.
+  void Rebind(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g);
 
   /// Starts from an extremum u (from SolveSurfaceSurface) at poses q_f, q_g.
   TrackStatus Reset(const Vector7d& q_f, const Vector7d& q_g, const Eigen::Vector4d& u);
@@ -61,8 +65,8 @@ class ContactTracker {
   TrackStatus Evaluate(const Vector7d& q_f, const Vector7d& q_g, bool correct,
                        bool jacobian = true);
 
-  const nurbs::NurbsSurface& f_;
-  const nurbs::NurbsSurface& g_;
+  const nurbs::NurbsSurface* f_;
+  const nurbs::NurbsSurface* g_;
   TrackerOptions options_;
   Eigen::Vector4d lo_, hi_;
   std::array<bool, 4> periodic_{};

@@ -90,8 +90,18 @@ class SurfaceContactTerm final : public Term {
     contact::SurfaceSurfaceExtremum ext;
     contact::SurfacePairEval eval;
     const contact::SurfaceSurfaceExtremum& extremum() const override { return ext; }
+    /// (The contact stands at u_new until the next evaluation: a second event before then is
+    /// matched against it.)
     void Reseed(const Eigen::Vector4d& u_new) override {
       u = u_new;
+      ext.u = u_new;
+      valid = false;
+      tracking = false;
+    }
+    /// The state of a term on another pair of surfaces (a BodyContactTerm's slot moved to
+    /// another face pair): Reseed next. Allocation free.
+    void Rebind(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g) {
+      tracker.Rebind(f, g);
       valid = false;
       tracking = false;
     }

@@ -142,7 +142,16 @@ TrimmedContactTerm::TrimmedContactTerm(int body_a, const nurbs::NurbsSurface* f,
       body_b_(body_b),
       g_(g),
       face_(body_a, f, body_b, g, seed, tracking),
-      edges_(f, trim) {}
+      edges_(std::make_shared<const contact::TrimEdges>(f, trim)) {}
+
+TrimmedContactTerm::TrimmedContactTerm(int body_a, std::shared_ptr<const contact::TrimEdges> edges,
+                                       int body_b, const nurbs::NurbsSurface* g,
+                                       const Eigen::Vector4d& seed, const ContactTracking& tracking)
+    : body_a_(body_a),
+      body_b_(body_b),
+      g_(g),
+      face_(body_a, &edges->surface(), body_b, g, seed, tracking),
+      edges_(std::move(edges)) {}
 
 std::unique_ptr<TermState> TrimmedContactTerm::MakeState() const {
   auto st = std::make_unique<State>();
@@ -160,15 +169,16 @@ void TrimmedContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   // The edge is followed from its last extremum while the contact stays on the same loop's
   // edge (contact::MeasureTrimmed), else started at the loop point nearest the face's.
   const bool was_on_edge = st->on_edge;
-  const contact::TrimmedMeasure m = contact::MeasureTrimmed(
-      edges_, pa, *g_, pb, face.ext, was_on_edge && st->valid ? &st->edge : nullptr, &st->material);
+  const contact::TrimmedMeasure m =
+      contact::MeasureTrimmed(*edges_, pa, *g_, pb, face.ext,
+                              was_on_edge && st->valid ? &st->edge : nullptr, &st->material);
   st->on_edge = m.on_edge;
   st->reported = face.ext;
   if (st->on_edge) {
     st->edge = m.edge;
     nurbs::SpanHint hint_g, hint_f;
     int span = 0;
-    contact::EvaluateCurveSurface(*g_, pb, edges_.Curve(st->edge), pa, st->edge.u, &hint_g, &span,
+    contact::EvaluateCurveSurface(*g_, pb, edges_->Curve(st->edge), pa, st->edge.u, &hint_g, &span,
                                   &hint_f, &st->edge_eval);
     // β = (E − G)·n along g's normal at an interior extremum of g, along the line between the
     // points where the extremum is held on a bound (g's border, a joint of the loop).

@@ -118,12 +118,18 @@ class TrimmedContactTerm final : public Term {
     const contact::SurfaceSurfaceExtremum& extremum() const override { return reported; }
     void Reseed(const Eigen::Vector4d& u_new) override {
       face().Reseed(u_new);
+      reported.u = u_new;
       valid = false;
     }
   };
   /// The surfaces and the trim must outlive the term.
   TrimmedContactTerm(int body_a, const nurbs::NurbsSurface* f, const nurbs::TrimmedDomain* trim,
                      int body_b, const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed,
+                     const ContactTracking& tracking = {});
+  /// The same with f's edges built already (`edges` on f and its trim): shared by the terms of
+  /// one face, and allocation free (a BodyContactTerm's slot moving between face pairs).
+  TrimmedContactTerm(int body_a, std::shared_ptr<const contact::TrimEdges> edges, int body_b,
+                     const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed,
                      const ContactTracking& tracking = {});
 
   std::string name() const override { return "trimmed_contact"; }
@@ -144,7 +150,7 @@ class TrimmedContactTerm final : public Term {
   int body_a_, body_b_;
   const nurbs::NurbsSurface* g_;
   SurfaceContactTerm face_;
-  contact::TrimEdges edges_;
+  std::shared_ptr<const contact::TrimEdges> edges_;
 };
 
 std::shared_ptr<TrimConstraintTerm> MakeTrimConstraint(TrimForm form, int body_a,
