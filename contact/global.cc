@@ -205,7 +205,11 @@ Eigen::Vector3d Centroid(const Watched& w, const BodyPose& pose, int t) {
 
 struct GlobalContactStage::Impl {
   std::vector<Watched> watched;
-  std::vector<char> allowed;  // n x n
+  // The declared pairs: surface pairs (a < b, sorted) and body pairs (num_bodies²): memory grows
+  // with the declarations and the bodies, not with the faces' pairs.
+  std::vector<std::pair<int, int>> surface_declared;
+  std::vector<char> body_declared;
+  int num_bodies = 0;
   std::unique_ptr<fcl::BroadPhaseCollisionManagerd> manager;
   // Surface pairs the broad phase reported (a < b), then the chunk pairs of each whose world
   // boxes overlap: (surface a, surface b, chunk of a, chunk of b).
@@ -217,7 +221,13 @@ struct GlobalContactStage::Impl {
   std::vector<Seed> accepted;
   std::vector<std::pair<int, int>> triangle_pairs;
   int n = 0, pass = 0;
-  bool Allowed(int a, int b) const { return allowed[static_cast<size_t>(a * n + b)] != 0; }
+  bool Allowed(int a, int b) const {
+    const int ba = watched[static_cast<size_t>(a)].s.body,
+              bb = watched[static_cast<size_t>(b)].s.body;
+    if (body_declared[static_cast<size_t>(ba * num_bodies + bb)]) return true;
+    return std::binary_search(surface_declared.begin(), surface_declared.end(),
+                              std::make_pair(std::min(a, b), std::max(a, b)));
+  }
 };
 
 namespace {
@@ -350,13 +360,24 @@ Watched WatchSurface(int index, const GlobalSurface& s, const GlobalOptions& opt
 GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
                                        const std::vector<std::pair<int, int>>& pairs,
                                        const GlobalOptions& options)
+    : GlobalContactStage(std::move(surfaces), pairs, {}, options) {}
+
+GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
+                                       const std::vector<std::pair<int, int>>& pairs,
+                                       const std::vector<std::pair<int, int>>& body_pairs,
+                                       const GlobalOptions& options)
     : impl_(std::make_unique<Impl>()), options_(options) {
   if (!(options.release > options.activation)) {
     throw std::invalid_argument("global contact: release must exceed activation (hysteresis)");
   }
   Impl& m = *impl_;
   m.n = static_cast<int>(surfaces.size());
-  m.allowed.assign(static_cast<size_t>(m.n * m.n), 0);
+  for (const GlobalSurface& s : surfaces) {
+    if (s.body < 0) throw std::invalid_argument("global contact: a surface on body -1");
+    m.num_bodies = std::max(m.num_bodies, s.body + 1);
+  }
+  for (const auto& [a, b] : body_pairs) m.num_bodies = std::max({m.num_bodies, a + 1, b + 1});
+  m.body_declared.assign(static_cast<size_t>(m.num_bodies * m.num_bodies), 0);
   std::vector<char> declared(surfaces.size(), 0);
   for (const auto& [a, b] : pairs) {
     if (a < 0 || b < 0 || a >= m.n || b >= m.n || a == b) {
@@ -364,8 +385,20 @@ GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
                                   std::to_string(b) + ") does not name two of the " +
                                   std::to_string(m.n) + " surfaces");
     }
-    m.allowed[static_cast<size_t>(a * m.n + b)] = m.allowed[static_cast<size_t>(b * m.n + a)] = 1;
+    m.surface_declared.emplace_back(std::min(a, b), std::max(a, b));
     declared[static_cast<size_t>(a)] = declared[static_cast<size_t>(b)] = 1;
+  }
+  std::sort(m.surface_declared.begin(), m.surface_declared.end());
+  for (const auto& [a, b] : body_pairs) {
+    if (a < 0 || b < 0 || a == b) {
+      throw std::invalid_argument("global contact: body pair (" + std::to_string(a) + ", " +
+                                  std::to_string(b) + ") does not name two bodies");
+    }
+    m.body_declared[static_cast<size_t>(a * m.num_bodies + b)] = 1;
+    m.body_declared[static_cast<size_t>(b * m.num_bodies + a)] = 1;
+    for (size_t i = 0; i < surfaces.size(); ++i) {
+      if (surfaces[i].body == a || surfaces[i].body == b) declared[i] = 1;
+    }
   }
   if (options.broad_phase == GlobalOptions::BroadPhase::kSweepAndPrune) {
     m.manager = std::make_unique<fcl::SaPCollisionManagerd>();

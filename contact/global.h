@@ -96,13 +96,21 @@ struct GlobalStats {
 /// test on offset meshes (FCL: an OBBRSS tree per surface, a broad-phase manager across them)
 /// seeds the extremal-distance Newton solver; spheres of neglect drop seeds that would find a
 /// contact already known; hysteresis turns distances into add/remove events. Only surface pairs
-/// the scene declares are ever tested. A pass reads a pose snapshot and the tracked contacts and
-/// writes events: the stage shares no mutable state with its caller, so it can run on its own
-/// thread. (It allocates: it is not the servo loop.)
+/// the scene declares (one by one, or as the faces of two bodies) are ever tested. A pass reads a
+/// pose snapshot and the tracked contacts and writes events: the stage shares no mutable state with
+/// its caller, so it can run on its own thread. (It allocates: it is not the servo loop.)
 class GlobalContactStage {
  public:
   GlobalContactStage(std::vector<GlobalSurface> surfaces,
                      const std::vector<std::pair<int, int>>& pairs, const GlobalOptions& options);
+  /// With body pairs as well (a scene's "these two parts may touch", docs/cad.md): every
+  /// surface of body a against every surface of body b is tested (the surfaces of both need
+  /// offset meshes). The declarations are kept as they are given: memory grows with the
+  /// surfaces and the declarations, never with the pairs of surfaces they cover.
+  GlobalContactStage(std::vector<GlobalSurface> surfaces,
+                     const std::vector<std::pair<int, int>>& pairs,
+                     const std::vector<std::pair<int, int>>& body_pairs,
+                     const GlobalOptions& options);
   ~GlobalContactStage();
   GlobalContactStage(const GlobalContactStage&) = delete;
   GlobalContactStage& operator=(const GlobalContactStage&) = delete;
