@@ -15,10 +15,9 @@ namespace tangent::server {
 class GlobalLink {
  public:
   /// The stage over the servo's scene (its surfaces, declared pairs and global_stage settings).
-  explicit GlobalLink(const ServoLoop& servo)
-      : stage_(servo.GlobalSurfaces(), servo.GlobalPairs(), servo.scene().global) {}
+  explicit GlobalLink(const ServoLoop& servo) : GlobalLink(servo, servo.scene().global) {}
   GlobalLink(const ServoLoop& servo, const contact::GlobalOptions& options)
-      : stage_(servo.GlobalSurfaces(), servo.GlobalPairs(), options) {}
+      : stage_(servo.GlobalSurfaces(), servo.GlobalPairs(), servo.GlobalBodyPairs(), options) {}
 
   /// One pass on `snapshot`: emit(const ContactEventMsg&) for each event, in order.
   /// @return the number of events.

@@ -326,14 +326,64 @@ void ParseJoints(const Node& root, double unit, Scene* out) {
   }
 }
 
+// A contact declaration's "max_contacts" (slots reserved), or `fallback`.
+int MaxContacts(const Node& n, int fallback) {
+  if (!n.Has("max_contacts")) return fallback;
+  const double m = n.At("max_contacts").Number();
+  if (!(m >= 1 && m <= 8 && m == std::floor(m))) {
+    n.At("max_contacts").Fail("must be an integer from 1 to 8");
+  }
+  return static_cast<int>(m);
+}
+
+// A contact between two bodies ({"bodies": [A, B], "max_contacts": n}): all the faces of both
+// are watched.
+void ParseBodyPair(const Node& n, std::set<std::pair<int, int>>* seen, Scene* out) {
+  Scene& s = *out;
+  n.OnlyKeys({"bodies", "kind", "max_contacts", "comment"});
+  const Node bodies = n.At("bodies");
+  if (bodies.Size() != 2) bodies.Fail("must name two bodies");
+  BodyPairSpec c;
+  for (size_t k = 0; k < 2; ++k) {
+    const std::string name = bodies.At(k).String();
+    const int b = s.BodyIndex(name);
+    if (b < 0) bodies.At(k).Fail("no body named \"" + name + "\"");
+    bool has_surface = false;
+    for (const SceneSurface& sf : s.surfaces) has_surface = has_surface || sf.body == b;
+    if (!has_surface) bodies.At(k).Fail("body \"" + name + "\" has no surfaces");
+    (k == 0 ? c.body_a : c.body_b) = b;
+  }
+  if (c.body_a == c.body_b) bodies.Fail("names one body twice");
+  if (s.mechanism.body(c.body_a).fixed && s.mechanism.body(c.body_b).fixed) {
+    n.Fail("both bodies are fixed: they can never meet");
+  }
+  if (!seen->insert({std::min(c.body_a, c.body_b), std::max(c.body_a, c.body_b)}).second) {
+    n.Fail("body pair declared twice");
+  }
+  const std::string kind = n.String("kind", "unilateral");
+  if (kind != "unilateral") {
+    n.At("kind").Fail("a body pair is \"unilateral\" (non-penetration), got \"" + kind + "\"");
+  }
+  c.max_contacts = MaxContacts(n, c.max_contacts);
+  for (SceneSurface& sf : s.surfaces) {
+    if (sf.body == c.body_a || sf.body == c.body_b) sf.watched = true;
+  }
+  s.body_pairs.push_back(c);
+}
+
 // The contact pairs that may occur.
 void ParsePairs(const Node& root, Scene* out) {
   Scene& s = *out;
   if (root.Has("contacts")) {
     const Node contacts = root.At("contacts");
     std::set<std::pair<int, int>> seen;
+    std::set<std::pair<int, int>> body_pairs;
     for (size_t i = 0; i < contacts.Size(); ++i) {
       const Node n = contacts.At(i);
+      if (n.Has("bodies")) {
+        ParseBodyPair(n, &body_pairs, out);
+        continue;
+      }
       ContactPairSpec c;
       for (const char* key : {"a", "b"}) {
         const std::string name = n.At(key).String();
@@ -359,16 +409,23 @@ void ParsePairs(const Node& root, Scene* out) {
       } else if (kind != "unilateral") {
         n.At("kind").Fail("must be \"unilateral\" or \"floating\", got \"" + kind + "\"");
       }
-      if (n.Has("max_contacts")) {
-        const double m = n.At("max_contacts").Number();
-        if (!(m >= 1 && m <= 8 && m == std::floor(m))) {
-          n.At("max_contacts").Fail("must be an integer from 1 to 8");
-        }
-        c.max_contacts = static_cast<int>(m);
-      }
+      c.max_contacts = MaxContacts(n, c.max_contacts);
       s.surfaces[static_cast<size_t>(c.surface_a)].watched = true;
       s.surfaces[static_cast<size_t>(c.surface_b)].watched = true;
       s.pairs.push_back(c);
+    }
+    // A face pair of two bodies declared as a pair is already theirs: declaring it again would
+    // give one contact two slots.
+    for (size_t i = 0; i < contacts.Size(); ++i) {
+      const Node n = contacts.At(i);
+      if (n.Has("bodies")) continue;
+      const int ba = s.surfaces[static_cast<size_t>(s.SurfaceIndex(n.At("a").String()))].body;
+      const int bb = s.surfaces[static_cast<size_t>(s.SurfaceIndex(n.At("b").String()))].body;
+      if (body_pairs.count({std::min(ba, bb), std::max(ba, bb)})) {
+        n.Fail("its bodies \"" + s.mechanism.body(ba).name + "\" and \"" +
+               s.mechanism.body(bb).name +
+               "\" are declared as a pair: their faces' contacts are theirs");
+      }
     }
   }
 }

@@ -50,6 +50,14 @@ struct ContactPairSpec {
   int max_contacts = 2;  ///< contact slots reserved for this pair (unilateral)
 };
 
+/// Contact declared between two bodies ("these two parts may touch", docs/cad.md): every face of
+/// one against every face of the other, found by the global stage, kept in a pool of slots that
+/// move between face pairs (optimizer/body_contacts.h). Non-penetration only.
+struct BodyPairSpec {
+  int body_a = 0, body_b = 0;
+  int max_contacts = 4;  ///< contact slots reserved for the pair, shared by all its face pairs
+};
+
 struct JointSpec {
   std::string name;  ///< the scene's "name", or "joint <index>"
   std::string type;  ///< spherical, revolute, universal, cylindrical, prismatic, fixed
@@ -110,6 +118,7 @@ struct Scene {
   std::deque<SceneSurface> surfaces;  ///< stable addresses
   std::vector<JointSpec> joints;
   std::vector<ContactPairSpec> pairs;
+  std::vector<BodyPairSpec> body_pairs;
   std::vector<ObjectiveSpec> objectives;
   GraspSpec grasp;
   DeviceSpec device;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include <Eigen/Geometry>
@@ -43,6 +44,10 @@ optimizer::Mechanism ModelledMechanism(const Scene& scene) {
     mark(scene.surfaces[static_cast<size_t>(pair.surface_a)].body);
     mark(scene.surfaces[static_cast<size_t>(pair.surface_b)].body);
   }
+  for (const BodyPairSpec& pair : scene.body_pairs) {
+    mark(pair.body_a);
+    mark(pair.body_b);
+  }
   mark(scene.grasp.body);
   for (const ObjectiveSpec& o : scene.objectives) mark_term(o.term);
   optimizer::Mechanism modelled;
@@ -77,6 +82,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
 
   int slot_count = 0;
   for (const ContactPairSpec& pair : scene->pairs) slot_count += pair.max_contacts;
+  for (const BodyPairSpec& pair : scene->body_pairs) slot_count += pair.max_contacts;
   if (slot_count > kMaxContacts) {
     throw SceneError(scene->path + ": the contact pairs reserve " + std::to_string(slot_count) +
                      " contact slots, more than " + std::to_string(kMaxContacts));
@@ -84,7 +90,8 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   // Contacts present at the initial poses: one cold global pass.
   std::vector<contact::ContactEvent> events;
   {
-    contact::GlobalContactStage stage(GlobalSurfaces(), GlobalPairs(), scene->global);
+    contact::GlobalContactStage stage(GlobalSurfaces(), GlobalPairs(), GlobalBodyPairs(),
+                                      scene->global);
     stage.Run(poses_, {}, &events);
   }
   for (const ContactPairSpec& pair : scene->pairs) {
@@ -142,6 +149,35 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
       slots_.push_back(std::move(slot));
     }
   }
+  // Body pairs: a pool of slots each, every slot one term over both bodies' face tables (a
+  // face's trim edges built once, shared by its pools). Memory: the faces and the slots.
+  std::vector<std::optional<optimizer::ContactFace>> faces(scene->surfaces.size());
+  auto faces_of = [&](int body) {
+    std::vector<optimizer::ContactFace> out;
+    for (size_t i = 0; i < scene->surfaces.size(); ++i) {
+      const SceneSurface& sf = scene->surfaces[i];
+      if (sf.body != body) continue;
+      if (!faces[i]) {
+        faces[i] = optimizer::MakeContactFace(static_cast<int>(i), sf.body, &sf.surface,
+                                              sf.trim ? &*sf.trim : nullptr);
+      }
+      out.push_back(*faces[i]);
+    }
+    return out;
+  };
+  for (size_t k = 0; k < scene->body_pairs.size(); ++k) {
+    const BodyPairSpec& pair = scene->body_pairs[k];
+    for (int m = 0; m < pair.max_contacts; ++m) {
+      auto term = optimizer::MakeBodyContact(faces_of(pair.body_a), faces_of(pair.body_b),
+                                             options.tracking);
+      Slot slot{-1, -1, 0, false, false, term};
+      slot.body_pair = static_cast<int>(k);
+      slot.body_term = term.get();
+      const int index = p.AddInequality(slot.term);
+      slot.row = p.inequalities()[static_cast<size_t>(index)].row;
+      slots_.push_back(std::move(slot));
+    }
+  }
 
   // The grasp: a position goal at the grasp point (its weight is the coupling stiffness, in
   // the units where least astonishment has the problem's default weight), and for 6-DOF an
@@ -169,6 +205,8 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   // global pass's contacts), the grasp targets.
   for (Slot& s : slots_) {
     s.state = &solver_->data().StateAs<optimizer::ContactSlotState>(*s.term);
+    if (s.body_term)
+      s.body_state = &solver_->data().StateAs<optimizer::BodyContactTerm::State>(*s.term);
     if (!s.floating) s.state->Deactivate();
   }
   for (const auto& e : events) Apply(ToEventMsg(e));  // (a cold pass only adds)
@@ -221,6 +259,16 @@ void ServoLoop::Slot::Activate(const Eigen::Vector4d& u_pair) {
   state->Activate(swapped ? SwapPair(u_pair) : u_pair);
 }
 
+bool ServoLoop::Slot::Target(int a, int b) {
+  if (!body_term || !body_term->Target(body_state, a, b)) return false;
+  const int f = body_term->faces()[static_cast<size_t>(body_state->f)].id;
+  const int g = body_term->faces()[static_cast<size_t>(body_state->g)].id;
+  surface_a = std::min(f, g);
+  surface_b = std::max(f, g);
+  swapped = f > g;
+  return true;
+}
+
 std::vector<contact::GlobalSurface> ServoLoop::GlobalSurfaces() const {
   std::vector<contact::GlobalSurface> out;
   for (const SceneSurface& s : scene_->surfaces) {
@@ -235,19 +283,46 @@ std::vector<std::pair<int, int>> ServoLoop::GlobalPairs() const {
   return out;
 }
 
+std::vector<std::pair<int, int>> ServoLoop::GlobalBodyPairs() const {
+  std::vector<std::pair<int, int>> out;
+  for (const BodyPairSpec& p : scene_->body_pairs) out.emplace_back(p.body_a, p.body_b);
+  return out;
+}
+
 bool ServoLoop::Apply(const ContactEventMsg& e) {
   const int lo = std::min(e.surface_a, e.surface_b), hi = std::max(e.surface_a, e.surface_b);
   const Eigen::Vector4d u(e.u[0], e.u[1], e.u[2], e.u[3]);
-  // Among this pair's unilateral slots: the active one nearest to u, and a free one.
+  // The pair's slots: its own if it was declared, else its bodies' pool (when they were
+  // declared as a pair). Among them: the active one on this face pair nearest to u, and a free
+  // one.
+  bool declared = false;
+  for (const Slot& s : slots_)
+    declared = declared || (s.surface_a == lo && s.surface_b == hi && !s.body_term);
+  int pool = -1;
+  if (!declared && lo >= 0 && hi < static_cast<int>(scene_->surfaces.size())) {
+    const int ba = scene_->surfaces[static_cast<size_t>(lo)].body;
+    const int bb = scene_->surfaces[static_cast<size_t>(hi)].body;
+    for (size_t k = 0; k < scene_->body_pairs.size(); ++k) {
+      const BodyPairSpec& bp = scene_->body_pairs[k];
+      if ((bp.body_a == ba && bp.body_b == bb) || (bp.body_a == bb && bp.body_b == ba)) {
+        pool = static_cast<int>(k);
+      }
+    }
+  }
   Slot* nearest = nullptr;
   Slot* free = nullptr;
   double nearest_d = INFINITY;
   for (Slot& s : slots_) {
-    if (s.floating || s.surface_a != lo || s.surface_b != hi) continue;
+    if (s.floating) continue;
+    if (declared ? (s.body_term || s.surface_a != lo || s.surface_b != hi)
+                 : s.body_pair != pool || pool < 0) {
+      continue;
+    }
     if (!s.state->active) {
       if (!free) free = &s;
       continue;
     }
+    if (s.surface_a != lo || s.surface_b != hi) continue;  // another face pair of the pool
     const double d =
         contact::ParameterDistance(scene_->surfaces[static_cast<size_t>(lo)].surface,
                                    scene_->surfaces[static_cast<size_t>(hi)].surface, s.U(), u);
@@ -270,6 +345,7 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
   // 1e-3 of a domain apart), hence a bar at the stage's own same-point resolution.
   if (nearest && nearest_d < kSameContactParameters) return true;
   if (!free) return false;
+  if (free->body_term && !free->Target(lo, hi)) return false;
   free->Activate(u);
   return true;
 }
@@ -371,6 +447,8 @@ void ServoLoop::KeepGood() {
   lambda_i_good_ = solver_->inequality_multipliers();
   for (Slot& s : slots_) {
     if (s.state->active) s.good_u = s.state->extremum().u;
+    s.good_a = s.state->active ? s.surface_a : -1;
+    s.good_b = s.state->active ? s.surface_b : -1;
   }
   target_good_ = target_;
   orientation_target_good_ = orientation_target_;
@@ -380,7 +458,15 @@ void ServoLoop::RestoreGood() {
   q_ = q_good_;
   solver_->set_multipliers(lambda_e_good_, lambda_i_good_);
   for (Slot& s : slots_) {
-    if (s.state->active) s.state->Reseed(s.good_u);
+    if (!s.state->active) continue;
+    if (s.body_term && (s.good_a != s.surface_a || s.good_b != s.surface_b)) {
+      // A body slot moved to another face pair since: back to the good tick's, or free.
+      if (s.good_a < 0 || !s.Target(s.good_a, s.good_b)) {
+        s.state->Deactivate();
+        continue;
+      }
+    }
+    s.state->Reseed(s.good_u);
   }
   target_ = target_good_;
   orientation_target_ = orientation_target_good_;

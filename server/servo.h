@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "contact/global.h"
+#include "optimizer/body_contacts.h"
 #include "optimizer/contacts.h"
 #include "optimizer/goals.h"
 #include "optimizer/problem.h"
@@ -84,15 +85,18 @@ class ServoLoop {
   /// `now_ns`: CLOCK_MONOTONIC.
   void Tick(const DeviceSample* device, int64_t now_ns, TickResult* out);
   /// Applies a global-stage event: activates a free slot of the pair / frees the active slot
-  /// tracking the event's parameters (within 5 % of each parameter's domain). @return false
-  /// when no slot was free, or no active slot tracks the removed contact (counted by the
-  /// caller).
+  /// tracking the event's parameters (within 5 % of each parameter's domain). A face pair
+  /// covered by a declared body pair takes a free slot of the body pair's pool, moved to that
+  /// face pair. @return false when no slot was free, or no active slot tracks the removed
+  /// contact (counted by the caller).
   bool Apply(const ContactEventMsg& e);
   void FillSnapshot(Snapshot* s) const;
 
-  /// The global stage's view of the scene (surfaces in scene order; declared pairs).
+  /// The global stage's view of the scene (surfaces in scene order; declared surface pairs;
+  /// declared body pairs).
   std::vector<contact::GlobalSurface> GlobalSurfaces() const;
   std::vector<std::pair<int, int>> GlobalPairs() const;
+  std::vector<std::pair<int, int>> GlobalBodyPairs() const;
 
   const Eigen::VectorXd& q() const { return q_; }
   const Scene& scene() const { return *scene_; }
@@ -114,15 +118,26 @@ class ServoLoop {
 
  private:
   struct Slot {
-    int surface_a = 0, surface_b = 0;  ///< the pair's surfaces, a < b
-    int row = 0;                       ///< inequality row (multiplier index)
+    /// The pair's surfaces, a < b: fixed for a declared face pair; for a body pair's slot the
+    /// face pair it was last moved to (−1 before).
+    int surface_a = 0, surface_b = 0;
+    int row = 0;  ///< inequality row (multiplier index)
     bool floating = false;
     /// The term's f is surface_b and its g surface_a (a trimmed contact measures the trimmed
     /// surface as its f): its parameters are (s, t, u, v) in the pair's order.
     bool swapped = false;
-    optimizer::TermPtr term;  ///< a SurfaceContactTerm, or a TrimmedContactTerm on a trimmed pair
+    /// A SurfaceContactTerm, or a TrimmedContactTerm on a trimmed pair, or a BodyContactTerm
+    /// in a body pair's pool.
+    optimizer::TermPtr term;
     optimizer::ContactSlotState* state = nullptr;      ///< its data in solver_
     Eigen::Vector4d good_u = Eigen::Vector4d::Zero();  ///< tracked parameters, last good tick
+    /// A body pair's slot: its pool (index into Scene::body_pairs), its term and the term's data.
+    int body_pair = -1;
+    const optimizer::BodyContactTerm* body_term = nullptr;
+    optimizer::BodyContactTerm::State* body_state = nullptr;
+    int good_a = -1, good_b = -1;  ///< the body slot's face pair at the last good tick (−1 free)
+    /// Moves a body pair's slot to surfaces (a, b) (allocation free); false if not its faces.
+    bool Target(int a, int b);
     /// The contact in the pair's order (a's parameters first; p_a on a).
     Eigen::Vector4d U() const;
     Eigen::Vector3d PointA() const;

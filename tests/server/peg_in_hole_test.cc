@@ -189,13 +189,18 @@ std::vector<PegScene> Scenes() {
 #ifdef TANGENT_WITH_CAD
   out.push_back({"peg_in_hole_cad.json", "plate/solid 0 face 2", "plate/solid 0 face 6",
                  "plate/solid 0 face 7", "peg/solid 0 face 2"});
+  // The same parts with contact declared between the bodies: every face pair, found by the
+  // global stage, in a pool of slots.
+  out.push_back({"peg_in_hole_cad_bodies.json", "plate/solid 0 face 2", "plate/solid 0 face 6",
+                 "plate/solid 0 face 7", "peg/solid 0 face 2"});
 #endif
   return out;
 }
 
 std::string SceneName(const ::testing::TestParamInfo<PegScene>& p) {
-  return std::string(p.param.file).find("cad") != std::string::npos ? "ImportedParts"
-                                                                    : "Primitives";
+  const std::string file = p.param.file;
+  if (file.find("bodies") != std::string::npos) return "ImportedBodies";
+  return file.find("cad") != std::string::npos ? "ImportedParts" : "Primitives";
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, PegInHoleTest, ::testing::ValuesIn(Scenes()), SceneName);

@@ -148,6 +148,49 @@ std::string TrimmedPlate(const std::string& trim) {
          trim + R"(}], "grasp": {"body": "b"}})";
 }
 
+TEST(SceneTest, BadBodyPairsNameTheProblem) {
+  // Two bodies of one sphere each, then the "contacts" entry under test.
+  auto scene = [](const std::string& contact, const std::string& third = "") {
+    return R"({"bodies": [{"name": "a", "fixed": true}, {"name": "b"})" + third + R"(],
+      "surfaces": [{"name": "s", "body": "a", "type": "sphere", "radius": 0.002},
+                   {"name": "t", "body": "b", "type": "sphere", "radius": 0.002, "position": [0.01, 0, 0]}],
+      "contacts": [)" +
+           contact + R"(], "grasp": {"body": "b"}})";
+  };
+  auto has = [](const std::string& error, const std::string& what) {
+    EXPECT_NE(error.find(what), std::string::npos) << error;
+  };
+  has(Error(scene(R"({"bodies": ["a"]})")), "bad.json: contacts[0].bodies: must name two bodies");
+  has(Error(scene(R"({"bodies": ["a", "zz"]})")), "contacts[0].bodies[1]: no body named \"zz\"");
+  has(Error(scene(R"({"bodies": ["b", "b"]})")), "contacts[0].bodies: names one body twice");
+  has(Error(scene(R"({"bodies": ["a", "c"]})", R"(, {"name": "c"})")),
+      "contacts[0].bodies[1]: body \"c\" has no surfaces");
+  has(Error(scene(R"({"bodies": ["a", "b"]}, {"bodies": ["b", "a"]})")),
+      "contacts[1]: body pair declared twice");
+  has(Error(scene(R"({"bodies": ["a", "b"], "kind": "floating"})")),
+      "contacts[0].kind: a body pair is \"unilateral\" (non-penetration), got \"floating\"");
+  has(Error(scene(R"({"bodies": ["a", "b"], "max_contacts": 9})")),
+      "contacts[0].max_contacts: must be an integer from 1 to 8");
+  has(Error(scene(R"({"bodies": ["a", "b"], "a": "s"})")), "contacts[0].a: unknown field \"a\"");
+  has(Error(scene(R"({"bodies": ["a", "b"]}, {"a": "t", "b": "s"})")),
+      "contacts[1]: its bodies \"b\" and \"a\" are declared as a pair");
+  has(Error(
+          R"({"bodies": [{"name": "a", "fixed": true}, {"name": "b", "fixed": true}, {"name": "c"}],
+      "surfaces": [{"name": "s", "body": "a", "type": "sphere", "radius": 0.002},
+                   {"name": "t", "body": "b", "type": "sphere", "radius": 0.002, "position": [0.01, 0, 0]}],
+      "contacts": [{"bodies": ["a", "b"]}], "grasp": {"body": "c"}})"),
+      "contacts[0]: both bodies are fixed");
+  // Accepted: four slots by default, every face of both bodies watched.
+  const auto ok = ParseScene(scene(R"({"bodies": ["b", "a"]})"), "ok.json");
+  ASSERT_EQ(ok->body_pairs.size(), 1u);
+  EXPECT_EQ(ok->body_pairs[0].body_a, 1);
+  EXPECT_EQ(ok->body_pairs[0].body_b, 0);
+  EXPECT_EQ(ok->body_pairs[0].max_contacts, 4);
+  for (const SceneSurface& sf : ok->surfaces) {
+    EXPECT_TRUE(sf.watched && !sf.mesh.vertices.empty()) << sf.name;
+  }
+}
+
 TEST(SceneTest, TrimsLoadAndBadLoopsNameTheLoop) {
   const auto s = ParseScene(TrimmedPlate(R"({"holes": [[{"type": "circle", "center": [0.5, 0.5],
                                                        "radius": 0.2, "clockwise": true}]]})"),

@@ -296,5 +296,94 @@ TEST(ServoTest, IdlePartsAreNotModelled) {
   EXPECT_GT(events, 0);  // the drag made and broke contacts on the way
 }
 
+// Two bodies of two spheres each with contact declared between the bodies: "ground" (fixed;
+// faces g1, g2: surfaces 0, 1) and "ball" (b1, b2: 2, 3; b1 resting 0.05 mm off g1, sideways
+// so the contact is on both spheres' equators). `extra`: more faces on the ground.
+std::string TwoBodyScene(int max_contacts, const std::string& extra = "") {
+  return R"({"bodies": [{"name": "ground", "fixed": true},
+                        {"name": "ball", "mass": 0.01, "position": [0.01505, 0, 0]}],
+    "surfaces": [{"name": "g1", "body": "ground", "type": "sphere", "radius": 0.01},
+                 {"name": "g2", "body": "ground", "type": "sphere", "radius": 0.01,
+                  "center": [0, 0, 0.1]},
+                 {"name": "b1", "body": "ball", "type": "sphere", "radius": 0.005},
+                 {"name": "b2", "body": "ball", "type": "sphere", "radius": 0.005,
+                  "center": [0, 0, 0.04]})" +
+         extra + R"(],
+    "contacts": [{"bodies": ["ground", "ball"], "max_contacts": )" +
+         std::to_string(max_contacts) + R"(}],
+    "grasp": {"body": "ball"}})";
+}
+
+TEST(ServoTest, ABodyPairsContactsTakeSlotsFromOnePoolMovedToTheirFacePairs) {
+  const auto scene = ParseScene(TwoBodyScene(3), "bodies.json");
+  ASSERT_EQ(scene->body_pairs.size(), 1u);
+  EXPECT_TRUE(scene->pairs.empty());
+  for (const SceneSurface& sf : scene->surfaces) EXPECT_TRUE(sf.watched) << sf.name;
+  ServoLoop servo(*scene, ServoOptions{});
+  // The pool's rows are the pair's slots, not its face pairs: three for 2 x 2 faces, and three
+  // for 4 x 2.
+  EXPECT_EQ(servo.problem().inequalities().size(), 3u);
+  const auto wider = ParseScene(
+      TwoBodyScene(3, R"(, {"name": "g3", "body": "ground", "type": "sphere", "radius": 0.01,
+                     "center": [0, 0.1, 0]}, {"name": "g4", "body": "ground", "type": "sphere",
+                     "radius": 0.01, "center": [0, -0.1, 0]})"),
+      "wider.json");
+  EXPECT_EQ(ServoLoop(*wider, ServoOptions{}).problem().inequalities().size(), 3u);
+  // The cold pass found b1 on g1 (surfaces 0 and 2) and took a slot for it.
+  ASSERT_EQ(servo.active_contacts(), 1);
+  Snapshot snap;
+  servo.FillSnapshot(&snap);
+  EXPECT_EQ(snap.contacts[0].surface_a, 0);
+  EXPECT_EQ(snap.contacts[0].surface_b, 2);
+  EXPECT_EQ(snap.contacts[0].body_a, 0);
+  EXPECT_EQ(snap.contacts[0].body_b, 1);
+  EXPECT_NEAR(snap.contacts[0].beta, 0.05e-3, 1e-12);  // nothing presses it closer
+  // Events on other face pairs of the bodies take the pool's other slots, in the pair's order.
+  auto event = [](int added, int a, int b, double u0) {
+    ContactEventMsg m;
+    m.added = added;
+    m.surface_a = a;
+    m.surface_b = b;
+    m.u[0] = u0;
+    m.u[1] = 0.3;
+    m.u[2] = 0.6;
+    m.u[3] = 0.7;
+    return m;
+  };
+  EXPECT_TRUE(servo.Apply(event(1, 3, 1, 0.2)));  // b2 on g2, named in either order
+  EXPECT_TRUE(servo.Apply(event(1, 0, 3, 0.4)));  // b2 on g1
+  EXPECT_EQ(servo.active_contacts(), 3);
+  EXPECT_FALSE(servo.Apply(event(1, 1, 2, 0.4)));  // b1 on g2: the pool is used up
+  EXPECT_FALSE(servo.Apply(event(1, 0, 1, 0.4)));  // g1 on g2: one body, no pair
+  servo.FillSnapshot(&snap);
+  ASSERT_EQ(snap.num_contacts, 3);
+  EXPECT_EQ(snap.contacts[1].surface_a, 1);
+  EXPECT_EQ(snap.contacts[1].surface_b, 3);
+  EXPECT_EQ(snap.contacts[1].u[0], 0.2);  // the pair's order, as the event gave it
+  EXPECT_EQ(snap.contacts[1].u[3], 0.7);
+  // A removal frees the slot of the contact it names, on its face pair only.
+  EXPECT_FALSE(servo.Apply(event(0, 1, 2, 0.2)));
+  EXPECT_TRUE(servo.Apply(event(0, 1, 3, 0.2)));
+  EXPECT_EQ(servo.active_contacts(), 2);
+  EXPECT_TRUE(servo.Apply(event(1, 1, 2, 0.4)));  // and that slot moves on to b1 on g2
+  servo.FillSnapshot(&snap);
+  EXPECT_EQ(snap.contacts[1].surface_a, 1);
+  EXPECT_EQ(snap.contacts[1].surface_b, 2);
+  // Ticks with the moved slots allocate nothing.
+  DeviceSample d;
+  d.orientation[0] = 1.0;
+  TickResult r;
+  int64_t now = 1'000'000'000;
+  const long before = tangent::testing::AllocationCount();
+  for (int k = 0; k < 50; ++k) {
+    d.seq = k + 1;
+    d.received_ns = now;
+    servo.Tick(&d, now, &r);
+    now += 250'000;
+    EXPECT_LE(r.violation, 1e-10);
+  }
+  EXPECT_EQ(tangent::testing::AllocationCount() - before, 0);
+}
+
 }  // namespace
 }  // namespace tangent::server
