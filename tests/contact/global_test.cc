@@ -296,6 +296,46 @@ TEST(GlobalTest, OnlyDeclaredPairsAreTested) {
   EXPECT_TRUE(stage.found().empty());
 }
 
+TEST(GlobalTest, ABodyPairTestsEveryFacePairOfItsBodiesAndNoOther) {
+  // Body 0 has one wire, body 1 two (the same wire twice): a body pair (0, 1) finds what the
+  // surface pairs (0, 1) and (0, 2) find, declared one by one, and never tests (1, 2).
+  const Clips c;
+  std::vector<GlobalSurface> surfaces = c.Surfaces(2);
+  surfaces.push_back({1, &c.wire, &c.mesh});
+  GlobalContactStage bodies(surfaces, {}, {{1, 0}}, GlobalOptions{});
+  GlobalContactStage faces(surfaces, {{0, 1}, {2, 0}}, GlobalOptions{});
+  std::vector<ContactEvent> e_bodies, e_faces;
+  GlobalStats st_bodies, st_faces;
+  bodies.Run(AcrossTheInnerLoop(0.0), {}, &e_bodies, &st_bodies);
+  faces.Run(AcrossTheInnerLoop(0.0), {}, &e_faces, &st_faces);
+  EXPECT_EQ(st_bodies.candidate_pairs, 2);
+  EXPECT_EQ(st_faces.candidate_pairs, 2);
+  ASSERT_EQ(e_bodies.size(), 4u);  // two contacts on each face pair
+  ASSERT_EQ(e_bodies.size(), e_faces.size());
+  for (size_t i = 0; i < e_bodies.size(); ++i) {
+    EXPECT_EQ(e_bodies[i].contact.a, e_faces[i].contact.a);
+    EXPECT_EQ(e_bodies[i].contact.b, e_faces[i].contact.b);
+    EXPECT_EQ(e_bodies[i].contact.u, e_faces[i].contact.u);
+    EXPECT_EQ(e_bodies[i].contact.a, 0);
+  }
+  // A body pair needs the offset meshes of all its bodies' surfaces; it names two bodies.
+  surfaces[2].mesh = nullptr;
+  try {
+    GlobalContactStage s(surfaces, {}, {{0, 1}}, GlobalOptions{});
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(),
+                 "global contact: surface 2 is in a declared pair but has no offset mesh");
+  }
+  GlobalContactStage without(surfaces, {{0, 1}}, {}, GlobalOptions{});  // not needed otherwise
+  try {
+    GlobalContactStage s(c.Surfaces(2), {}, {{1, 1}}, GlobalOptions{});
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "global contact: body pair (1, 1) does not name two bodies");
+  }
+}
+
 TEST(GlobalTest, BadInputIsRejectedWithAMessage) {
   const Clips c;
   GlobalOptions bad;
