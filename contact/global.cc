@@ -642,6 +642,22 @@ OnMaterial MeasureOnMaterial(const Watched& wa, const BodyPose& pa, const Watche
   return {false, e.beta, e.p_f, e.p_g, e.status};
 }
 
+// A face extremum on the material held on its surface's border (ExtremalStatus::kAtBoundary,
+// every held parameter on a trimmed surface): where a face's material reaches its surface's
+// border (an imported cylinder wall's top at a hole's rim), the border is the material's edge and
+// the held extremum its contact with the other surface, as a trim edge's is. The servo's
+// trimmed term measures it so (a face contact held on a bound, with its boundary Hessian); the
+// stage keeps and finds it alike, rather than calling it gone from the domain and finding it
+// again every pass. `on`: its MeasureOnMaterial.
+bool HeldOnMaterialBorder(const Watched& wa, const Watched& wb, const SurfaceSurfaceExtremum& e,
+                          const OnMaterial& on) {
+  if (e.status != ExtremalStatus::kAtBoundary || on.on_edge) return false;
+  for (int i = 0; i < 4; ++i) {
+    if (e.at_bound[static_cast<size_t>(i)] && !(i < 2 ? wa.edges : wb.edges)) return false;
+  }
+  return true;
+}
+
 // The minima beside a saddle of the distance (relative_curvature.h): the surfaces cross along
 // the eigenvector w of M's negative eigenvalue, so a minimum (the deepest point of the crossing,
 // or the nearest of a near miss) lies on each side of the saddle along w. Newton from a seed
@@ -727,13 +743,15 @@ void RefineClusters(const GlobalContactStage::Impl& m, const GlobalOptions& opti
              on.status == ExtremalStatus::kConverged && on.beta < options.activation &&
              on.beta > -options.max_penetration;
       } else {
-        ok = e.status == ExtremalStatus::kConverged && e.beta < options.activation &&
-             e.beta > -options.max_penetration && e.alignment < 0.0;
+        ok = (e.status == ExtremalStatus::kConverged || HeldOnMaterialBorder(wa, wb, e, on)) &&
+             e.beta < options.activation && e.beta > -options.max_penetration && e.alignment < 0.0;
       }
     }
     if (!ok) continue;
-    // A saddle of the distance is not a contact: the minima beside it are.
-    if (const RelativeCurvature rc = RelativeCurvatureOf(at); !on.on_edge && rc.crossing) {
+    // A saddle of the distance is not a contact: the minima beside it are. (Held on a border,
+    // the surfaces' curvature across it says nothing.)
+    if (const RelativeCurvature rc = RelativeCurvatureOf(at);
+        !on.on_edge && e.status == ExtremalStatus::kConverged && rc.crossing) {
       MinimaBeside(*wa.s.surface, pa, *wb.s.surface, pb, e, at, rc, options, a, b, found);
       continue;
     }
@@ -817,9 +835,11 @@ void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
     // re-solve ends converged-but-singular on the same pair. Removing it there made contacts
     // at domes' poles chatter (removed and found again every pass: scripts/faults.sh
     // contact_burst); the servo's tracker holds them exactly, and separation still removes them.
-    if (e.status == ExtremalStatus::kAtBoundary) {
+    const bool border = !jumped && HeldOnMaterialBorder(wa, wb, e, on);
+    if (e.status == ExtremalStatus::kAtBoundary && !border) {
       remove(ContactEvent::Reason::kLeftDomain);
-    } else if ((e.status != ExtremalStatus::kConverged && e.status != ExtremalStatus::kSingular) ||
+    } else if ((e.status != ExtremalStatus::kConverged && e.status != ExtremalStatus::kSingular &&
+                !border) ||
                jumped) {
       remove(ContactEvent::Reason::kLost);
     } else if (e.beta > options_.release) {
@@ -827,7 +847,8 @@ void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
     } else if (same_as_earlier(k, e)) {
       // Two tracked contacts on one point (the minima of a split came back together).
       remove(ContactEvent::Reason::kMerged);
-    } else if (const RelativeCurvature rc = RelativeCurvatureOf(at); !on.on_edge && rc.crossing) {
+    } else if (const RelativeCurvature rc = RelativeCurvatureOf(at);
+               !on.on_edge && !border && rc.crossing) {
       // The pair the contact follows turned from a minimum into a saddle (a pitchfork: e.g.
       // two interlocked wires turned until one lies in the other's bend, tighter than itself);
       // β ≥ 0 there no longer keeps the surfaces apart. The minima either side replace it.

@@ -336,6 +336,47 @@ TEST(GlobalTest, ABodyPairTestsEveryFacePairOfItsBodiesAndNoOther) {
   }
 }
 
+TEST(GlobalTest, AContactHeldOnATrimmedFacesBorderIsKeptNotRefound) {
+  // A cylinder wall (radius 5 mm, 10 mm high) whose material is its whole domain, as an
+  // imported face's, and a 2 mm ball 0.05 mm off its top rim from outside and above: the wall's
+  // extremum is held on its border v = 1, the material's edge there. Found once, then kept pass
+  // after pass (it was removed as gone from the domain and found again every pass). The same
+  // surface untrimmed has no edge there: its border is where the surface ends.
+  const nurbs::NurbsSurface wall = nurbs::MakeCylinder(5 * mm, 10 * mm);
+  const nurbs::TrimmedDomain whole({0, 0}, {1, 1}, std::nullopt, {});
+  const nurbs::OffsetMesh wall_mesh = nurbs::MakeOffsetMesh(wall, 20e-6, 0.25e-3, 0.5e-3);
+  const nurbs::NurbsSurface ball = nurbs::MakeSphere({0, 0, 0}, 2 * mm);
+  const nurbs::OffsetMesh ball_mesh = nurbs::MakeOffsetMesh(ball, 20e-6, 0.25e-3, 0.5e-3);
+  Vector7d q_wall, q_ball;
+  q_wall << 0, 0, 0, 1, 0, 0, 0;
+  const Eigen::Vector3d rim(5 * mm, 0, 10 * mm);
+  const Eigen::Vector3d out = Eigen::Vector3d(1 * mm, 0, std::sqrt(3.0) * mm).normalized();
+  q_ball << rim + (2 * mm + 0.05 * mm) * out, 1, 0, 0, 0;
+  const std::vector<BodyPose> poses = Poses({q_wall, q_ball});
+  for (const bool trimmed : {true, false}) {
+    SCOPED_TRACE(trimmed ? "trimmed" : "untrimmed");
+    GlobalContactStage stage(
+        {{0, &wall, &wall_mesh, trimmed ? &whole : nullptr}, {1, &ball, &ball_mesh, nullptr}},
+        {{0, 1}}, GlobalOptions{});
+    std::vector<ContactEvent> events;
+    stage.Run(poses, {}, &events);
+    if (!trimmed) {
+      EXPECT_TRUE(events.empty());
+      continue;
+    }
+    ASSERT_EQ(events.size(), 1u);
+    const GlobalContact c = events[0].contact;
+    EXPECT_EQ(events[0].kind, ContactEvent::Kind::kAdded);
+    EXPECT_NEAR(c.beta, 0.05 * mm, 1e-12);
+    EXPECT_NEAR(c.u[1], 1.0, 1e-12);  // on the wall's top border
+    EXPECT_LT((c.p_a - rim).norm(), 1e-12);
+    for (int pass = 0; pass < 3; ++pass) {
+      stage.Run(poses, {c}, &events);
+      EXPECT_TRUE(events.empty()) << pass;
+    }
+  }
+}
+
 TEST(GlobalTest, BadInputIsRejectedWithAMessage) {
   const Clips c;
   GlobalOptions bad;
