@@ -1,0 +1,118 @@
+// The soak's paperclip drag offline (docs/reliability.md, "Soak"): the servo, the simulated
+// device with its driver watchdog and the global stage stepped in one thread along the looped
+// "drag" trajectory, deterministic. Prints, per simulated second: contacts, mean |F| at the hand,
+// events; and when the chain comes apart (the force at the hand stays below 0.02 N for a whole
+// circle while the drag pulls).
+//
+//   ./build/bench/chain_soak [--seconds 150] [--from 0]   (print seconds from)
+//                            [--trace-from T --trace-to T]  (every device step's contacts)
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "server/global_link.h"
+#include "server/phantom.h"
+#include "server/scene.h"
+#include "server/servo.h"
+
+using namespace tangent::server;
+
+int main(int argc, char** argv) {
+  double seconds = 150.0, from = 0.0, trace_from = 1e9, trace_to = -1.0;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--trace-from")) trace_from = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--trace-to")) trace_to = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--from")) from = std::atof(argv[i + 1]);
+  }
+  const auto scene = LoadScene(std::string(TANGENT_SCENES_DIR) + "/paperclips.json");
+  ServoLoop servo(*scene, ServoOptions{});
+  GlobalLink link(servo);
+  HandTrajectory hand = HandTrajectory::BuiltIn("drag");
+  hand.LoopFrom(3.0);
+  DeviceModel device;
+  DriverWatchdog watchdog(20e-3, 500.0);
+  const double dt = 1e-3;
+  int64_t now = 1'000'000'000, seq = 0;
+  Eigen::Vector3d prev_hand = hand.At(0.0), wrench = Eigen::Vector3d::Zero();
+  double received = -1.0;
+  TickResult r;
+  Snapshot snap;
+  double f_sum = 0.0, worst_violation = 0.0;
+  int events = 0, contacts_max = 0, quiet = 0;
+  bool apart = false;
+  for (int64_t k = 0; k < static_cast<int64_t>(seconds / dt); ++k) {
+    const double t = dt * static_cast<double>(k);
+    const Eigen::Vector3d rendered = watchdog.Step(t, dt, wrench, received);
+    const Eigen::Vector3d target = hand.At(t);
+    const Eigen::Vector3d f = device.Step(dt, target, (target - prev_hand) / dt, rendered);
+    prev_hand = target;
+    DeviceSample s;
+    s.seq = ++seq;
+    s.utime = now / 1000;
+    s.received_ns = now;
+    for (int i = 0; i < 3; ++i) {
+      s.position[i] = device.position()[i];
+      s.velocity[i] = device.velocity()[i];
+    }
+    s.orientation[0] = 1.0;
+    for (int tick = 0; tick < 4; ++tick) {
+      servo.Tick(&s, now, &r);
+      now += 250'000;
+      worst_violation = std::max(worst_violation, r.violation);
+      if (r.answered) {
+        wrench = Eigen::Vector3d(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
+        received = t;
+      }
+    }
+    f_sum += f.norm();
+    servo.FillSnapshot(&snap);
+    contacts_max = std::max(contacts_max, snap.num_contacts);
+    const bool trace = t >= trace_from && t <= trace_to;
+    if (trace) {
+      std::printf("t %.3f it %d viol %.1e |F| %.3f lost %lld solves %lld:", t, r.iterations,
+                  r.violation, f.norm(), static_cast<long long>(r.lost),
+                  static_cast<long long>(r.solves));
+      for (int c = 0; c < snap.num_contacts; ++c) {
+        const TrackedContact& x = snap.contacts[c];
+        std::printf(" [%d-%d b %.2e u %.4f %.4f %.4f %.4f f %.3f]", x.surface_a, x.surface_b,
+                    x.beta, x.u[0], x.u[1], x.u[2], x.u[3], x.force);
+      }
+      std::printf("\n");
+    }
+    if (k % 4 == 3) {
+      link.Pass(snap, [&](const ContactEventMsg& m) {
+        const bool ok = servo.Apply(m);
+        events += ok;
+        if (trace) {
+          std::printf("  event %s %d-%d u %.4f %.4f %.4f %.4f%s\n", m.added ? "add" : "remove",
+                      m.surface_a, m.surface_b, m.u[0], m.u[1], m.u[2], m.u[3],
+                      ok ? "" : " (not applied)");
+        }
+      });
+    }
+    quiet = t > 10.0 && f.norm() < 0.02 ? quiet + 1 : 0;
+    if (!apart && quiet > 5000) {
+      apart = true;
+      std::printf("chain_soak: apart at %.3f s (force below 0.02 N for a whole circle)\n", t - 5.0);
+    }
+    if ((k + 1) % 1000 == 0) {
+      if (t >= from) {
+        std::printf("%6.0f s  contacts %d (max %d)  mean |F| %.3f N  events %d  violation %.1e\n",
+                    t + dt, snap.num_contacts, contacts_max, f_sum / 1000.0, events,
+                    worst_violation);
+      }
+      f_sum = 0.0;
+      events = 0;
+      contacts_max = 0;
+      worst_violation = 0.0;
+    }
+  }
+  std::printf("chain_soak: %s after %.0f s\n", apart ? "APART" : "held", seconds);
+  return apart ? 1 : 0;
+}
