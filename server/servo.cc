@@ -295,9 +295,9 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
   // The pair's slots: its own if it was declared, else its bodies' pool (when they were
   // declared as a pair). Among them: the active one on this face pair nearest to u, and a free
   // one.
+  auto on_pair = [&](const Slot& s) { return s.surface_a == lo && s.surface_b == hi; };
   bool declared = false;
-  for (const Slot& s : slots_)
-    declared = declared || (s.surface_a == lo && s.surface_b == hi && !s.body_term);
+  for (const Slot& s : slots_) declared = declared || (!s.body_term && on_pair(s));
   int pool = -1;
   if (!declared && lo >= 0 && hi < static_cast<int>(scene_->surfaces.size())) {
     const int ba = scene_->surfaces[static_cast<size_t>(lo)].body;
@@ -309,20 +309,18 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
       }
     }
   }
+  if (!declared && pool < 0) return false;  // no slot may hold it
   Slot* nearest = nullptr;
   Slot* free = nullptr;
   double nearest_d = INFINITY;
   for (Slot& s : slots_) {
-    if (s.floating) continue;
-    if (declared ? (s.body_term || s.surface_a != lo || s.surface_b != hi)
-                 : s.body_pair != pool || pool < 0) {
-      continue;
-    }
+    const bool mine = declared ? !s.body_term && on_pair(s) : s.body_pair == pool;
+    if (s.floating || !mine) continue;
     if (!s.state->active) {
       if (!free) free = &s;
       continue;
     }
-    if (s.surface_a != lo || s.surface_b != hi) continue;  // another face pair of the pool
+    if (!on_pair(s)) continue;  // another face pair of the pool
     const double d =
         contact::ParameterDistance(scene_->surfaces[static_cast<size_t>(lo)].surface,
                                    scene_->surfaces[static_cast<size_t>(hi)].surface, s.U(), u);

@@ -4,6 +4,7 @@
 // gradient at q, its weighted Hessian folded to 14 × 14 over (q_a, q_b), and central differences
 // of its analytic gradient to compare that Hessian with.
 
+#include <algorithm>
 #include <vector>
 
 #include <Eigen/Core>
@@ -61,6 +62,39 @@ inline Eigen::Matrix<double, 14, 14> GradientDifferences(const optimizer::Mechan
   }
   TermValue(m, t, st, q, nullptr);
   return fd;
+}
+
+/// Central differences of re-solved values, per coordinate k: (β(q + h e_k) − β(q − h e_k)) / 2h,
+/// to compare with ∇β. Leaves the term at q.
+inline Eigen::Matrix<double, 1, 14> ValueDifferences(const optimizer::Mechanism& m,
+                                                     const optimizer::Term& t,
+                                                     optimizer::TermState* st,
+                                                     const Eigen::VectorXd& q, double h) {
+  Eigen::Matrix<double, 1, 14> fd;
+  for (int k = 0; k < 14; ++k) {
+    Eigen::VectorXd qp = q, qm = q;
+    qp[k] += h;
+    qm[k] -= h;
+    fd[k] = (TermValue(m, t, st, qp, nullptr) - TermValue(m, t, st, qm, nullptr)) / (2 * h);
+  }
+  TermValue(m, t, st, q, nullptr);
+  return fd;
+}
+
+/// Per row k of the weighted Hessian at q: its largest difference from GradientDifferences,
+/// relative to the row's size (at least 1). Leaves the term at q.
+inline Eigen::Matrix<double, 14, 1> HessianRowErrors(const optimizer::Mechanism& m,
+                                                     const optimizer::Term& t,
+                                                     optimizer::TermState* st,
+                                                     const Eigen::VectorXd& q, double w, double h) {
+  const Eigen::Matrix<double, 14, 14> H = TermHessianAt(m, t, st, q, w);
+  const Eigen::Matrix<double, 14, 14> fd = GradientDifferences(m, t, st, q, w, h);
+  Eigen::Matrix<double, 14, 1> err;
+  for (int k = 0; k < 14; ++k) {
+    err[k] = (fd.row(k) - H.row(k)).cwiseAbs().maxCoeff() /
+             std::max(1.0, H.row(k).cwiseAbs().maxCoeff());
+  }
+  return err;
 }
 
 }  // namespace tangent::testing
