@@ -46,8 +46,8 @@ int BodyContactTerm::FaceIndex(int id) const {
 
 std::unique_ptr<TermState> BodyContactTerm::MakeState() const {
   auto st = std::make_unique<State>();
-  // Inner terms on the first face of each body until the first Target(); their states are made
-  // here, once, and re-pointed from then on.
+  // Inner terms on body a's first face and body b's last until the first Target(); their states
+  // are made here, once, and re-pointed from then on.
   const ContactFace& fa = faces_.front();
   const ContactFace& fb = faces_.back();
   const Eigen::Vector4d seed = Eigen::Vector4d::Constant(0.5);
@@ -79,19 +79,13 @@ bool BodyContactTerm::Target(State* st, int id_x, int id_y) const {
   st->swapped = fx->body != body_a_;
   st->trimmed = fx->trim != nullptr;
   const Eigen::Vector4d seed = Eigen::Vector4d::Constant(0.5);
+  // (The inner states stay active: the slot's own state is what a free slot clears.)
   if (st->trimmed) {
     st->cut.emplace(fx->body, fx->edges, fy->body, fy->surface, seed, tracking_);
-    auto& cut = static_cast<TrimmedContactTerm::State&>(*st->cut_state);
-    cut.face().Rebind(*fx->surface, *fy->surface);
-    cut.active = true;
-    cut.valid = false;
-    cut.on_edge = false;
-    cut.material = {};
+    static_cast<TrimmedContactTerm::State&>(*st->cut_state).Rebind(*fx->surface, *fy->surface);
   } else {
     st->plain.emplace(fx->body, fx->surface, fy->body, fy->surface, seed, tracking_);
-    auto& plain = static_cast<SurfaceContactTerm::State&>(*st->plain_state);
-    plain.Rebind(*fx->surface, *fy->surface);
-    plain.active = true;
+    static_cast<SurfaceContactTerm::State&>(*st->plain_state).Rebind(*fx->surface, *fy->surface);
   }
   return true;
 }

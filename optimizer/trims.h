@@ -121,6 +121,15 @@ class TrimmedContactTerm final : public Term {
       reported.u = u_new;
       valid = false;
     }
+    /// The state of a term on another face pair (a BodyContactTerm's slot moved): the face
+    /// contact rebound, no edge followed, nothing remembered of the material. Reseed next.
+    /// Allocation free.
+    void Rebind(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g) {
+      face().Rebind(f, g);
+      valid = false;
+      on_edge = false;
+      material = {};
+    }
   };
   /// The surfaces and the trim must outlive the term.
   TrimmedContactTerm(int body_a, const nurbs::NurbsSurface* f, const nurbs::TrimmedDomain* trim,

@@ -378,6 +378,7 @@ void ParsePairs(const Node& root, Scene* out) {
     const Node contacts = root.At("contacts");
     std::set<std::pair<int, int>> seen;
     std::set<std::pair<int, int>> body_pairs;
+    std::vector<size_t> pair_nodes;
     for (size_t i = 0; i < contacts.Size(); ++i) {
       const Node n = contacts.At(i);
       if (n.Has("bodies")) {
@@ -413,18 +414,18 @@ void ParsePairs(const Node& root, Scene* out) {
       s.surfaces[static_cast<size_t>(c.surface_a)].watched = true;
       s.surfaces[static_cast<size_t>(c.surface_b)].watched = true;
       s.pairs.push_back(c);
+      pair_nodes.push_back(i);
     }
     // A face pair of two bodies declared as a pair is already theirs: declaring it again would
-    // give one contact two slots.
-    for (size_t i = 0; i < contacts.Size(); ++i) {
-      const Node n = contacts.At(i);
-      if (n.Has("bodies")) continue;
-      const int ba = s.surfaces[static_cast<size_t>(s.SurfaceIndex(n.At("a").String()))].body;
-      const int bb = s.surfaces[static_cast<size_t>(s.SurfaceIndex(n.At("b").String()))].body;
+    // give one contact two slots. (pair_nodes[k]: the declaration of s.pairs[k].)
+    for (size_t k = 0; k < s.pairs.size(); ++k) {
+      const int ba = s.surfaces[static_cast<size_t>(s.pairs[k].surface_a)].body;
+      const int bb = s.surfaces[static_cast<size_t>(s.pairs[k].surface_b)].body;
       if (body_pairs.count({std::min(ba, bb), std::max(ba, bb)})) {
-        n.Fail("its bodies \"" + s.mechanism.body(ba).name + "\" and \"" +
-               s.mechanism.body(bb).name +
-               "\" are declared as a pair: their faces' contacts are theirs");
+        contacts.At(pair_nodes[k])
+            .Fail("its bodies \"" + s.mechanism.body(ba).name + "\" and \"" +
+                  s.mechanism.body(bb).name +
+                  "\" are declared as a pair: their faces' contacts are theirs");
       }
     }
   }
