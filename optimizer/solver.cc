@@ -49,6 +49,20 @@ Solver::Solver(const Problem& problem, const SolverOptions& options)
   lambda_i_best_.setZero(problem.num_inequality_rows());
   shifted_.setZero(problem.num_inequality_rows());
   active_.assign(static_cast<size_t>(problem.num_inequality_rows()), 0);
+  {
+    const int rows = problem.num_equality_rows() + problem.num_inequality_rows();
+    ls_J_.setZero(rows, n_);
+    ls_part_e_.setZero(problem.num_equality_rows(), n_);
+    ls_part_i_.setZero(problem.num_inequality_rows(), n_);
+    ls_G_.setZero(rows, rows);
+    ls_JJt_.setZero(rows, rows);
+    ls_r_.setZero(n_);
+    ls_Jr_.setZero(rows);
+    ls_rhs_.setZero(rows);
+    ls_lambda_.setZero(rows);
+    ls_ldlt_ = Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower>(rows);
+    ls_unknown_.assign(static_cast<size_t>(rows), 0);
+  }
   kkt_.setZero(n_);
   grad_e_.setZero(n_);
   linearized_e_.setZero(problem.num_equality_rows());
@@ -147,51 +161,75 @@ Eigen::MatrixXd Solver::DenseConstraintJacobian() const {
   return J;
 }
 
-void Solver::LeastSquaresMultipliers() {
-  // min |∇E − J_Aᵀλ_A|² over the equalities and the inequalities within the constraint
-  // tolerance of their bound, by the normal equations J_A J_Aᵀ λ = J_A ∇E with a relative 1e-12
-  // on the diagonal: redundant rows get a regularized, near minimum-norm share. (A start only:
-  // the solve refines the multipliers. It was a complete orthogonal decomposition of J_Aᵀ,
-  // whose Householder updates were 15 % of the four-bar at seven angles.) An
-  // inequality that comes out pulling (λ < 0) is not held by its bound: dropped, and solved
-  // again. (Measured: a design start at the optimum, on a length bound, took 28 iterations from
-  // λ = 0 while the bound's multiplier built up through the penalty.)
-  const int me = ev_.c_e().size(), mi = ev_.c_i().size();
-  const Eigen::MatrixXd J = DenseConstraintJacobian();
-  std::vector<int> rows;
-  for (int i = 0; i < me; ++i) rows.push_back(i);
-  for (int i = 0; i < mi; ++i) {
-    if (ev_.c_i()[i] <= options_.constraint_tolerance) rows.push_back(me + i);
+bool Solver::LeastSquaresMultipliers(bool need_inequality) {
+  // min |r − J_Uᵀλ_U|² over the unknown rows U (the equalities with λ = 0, the inequalities
+  // within the constraint tolerance of their bound with λ = 0), r = ∇E − Jᵀλ the residual the
+  // other rows leave, by the normal equations J_U J_Uᵀ λ_U = J_U r with a relative 1e-12 on the
+  // diagonal: redundant rows get a regularized, near minimum-norm share. The system keeps its
+  // full size (a row outside U is an identity row with right-hand side 0), so nothing is
+  // allocated. An inequality that comes out pulling (λ < 0) is not held by its bound: dropped,
+  // and solved again. (A start only: the solve refines the multipliers. Measured: a design start
+  // at the optimum, on a length bound, took 28 iterations from λ = 0 while the bound's
+  // multiplier built up through the penalty; and a servo solve from the paperclip chain at rest,
+  // its hooks touching unloaded, took a first Newton step of |Δq| = 0.15 with no contact
+  // curvature in the matrix — a hook turned 17°, 4 mm into the other wire — where the estimate
+  // gives 7e-3 and 3 iterations.)
+  const int me = ev_.c_e().size(), mi = ev_.c_i().size(), m = me + mi;
+  bool any_inequality = false, any = false;
+  for (int i = 0; i < m; ++i) {
+    const bool unknown =
+        i < me ? lambda_e_[i] == 0.0
+               : lambda_i_[i - me] == 0.0 && ev_.c_i()[i - me] <= options_.constraint_tolerance;
+    ls_unknown_[static_cast<size_t>(i)] = unknown;
+    any = any || unknown;
+    any_inequality = any_inequality || (unknown && i >= me);
   }
-  Eigen::VectorXd lambda;
-  Eigen::MatrixXd JJt;
+  if (!any || (need_inequality && !any_inequality)) return false;
+  ev_.DenseJacobian(ProblemEvaluator::kEquality, &ls_part_e_);
+  ev_.DenseJacobian(ProblemEvaluator::kInequality, &ls_part_i_);
+  ls_J_.topRows(me) = ls_part_e_;
+  ls_J_.bottomRows(mi) = ls_part_i_;
+  ls_r_ = grad_e_;
+  ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &ls_r_);
+  ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, &ls_r_);
+  ls_G_.setZero();
+  ls_G_.selfadjointView<Eigen::Lower>().rankUpdate(ls_J_);
+  ls_Jr_.noalias() = ls_J_ * ls_r_;
   for (int round = 0; round <= mi; ++round) {
-    const Eigen::Index k = static_cast<Eigen::Index>(rows.size());
-    Eigen::MatrixXd JA(k, n_);
-    for (Eigen::Index r = 0; r < k; ++r) JA.row(r) = J.row(rows[static_cast<size_t>(r)]);
-    JJt.setZero(k, k);
-    JJt.selfadjointView<Eigen::Lower>().rankUpdate(JA);
-    const double scale = k ? JJt.diagonal().maxCoeff() : 0.0;
-    JJt.diagonal().array() += 1e-12 * scale + 1e-300;
-    lambda = JJt.selfadjointView<Eigen::Lower>().ldlt().solve(JA * grad_e_);
-    std::vector<int> kept;
-    for (size_t r = 0; r < rows.size(); ++r) {
-      if (rows[r] < me || lambda[static_cast<Eigen::Index>(r)] >= 0.0) kept.push_back(rows[r]);
+    double scale = 0.0;
+    for (int i = 0; i < m; ++i) {
+      if (ls_unknown_[static_cast<size_t>(i)]) scale = std::max(scale, ls_G_(i, i));
     }
-    if (kept.size() == rows.size()) break;
-    rows = kept;
+    for (int j = 0; j < m; ++j) {
+      const bool uj = ls_unknown_[static_cast<size_t>(j)];
+      for (int i = j; i < m; ++i) {
+        const bool ui = ls_unknown_[static_cast<size_t>(i)];
+        ls_JJt_(i, j) = ui && uj ? ls_G_(i, j) : (i == j ? 1.0 : 0.0);
+      }
+      if (uj) ls_JJt_(j, j) += 1e-12 * scale + 1e-300;
+      ls_rhs_[j] = uj ? ls_Jr_[j] : 0.0;
+    }
+    ls_ldlt_.compute(ls_JJt_);
+    ls_lambda_.noalias() = ls_ldlt_.solve(ls_rhs_);
+    if (!ls_lambda_.allFinite()) return false;
+    bool dropped = false;
+    for (int i = me; i < m; ++i) {
+      if (ls_unknown_[static_cast<size_t>(i)] && ls_lambda_[i] < 0.0) {
+        ls_unknown_[static_cast<size_t>(i)] = 0;
+        dropped = true;
+      }
+    }
+    if (!dropped) break;
   }
-  if (!lambda.allFinite()) return;
-  lambda_e_.setZero();
-  lambda_i_.setZero();
-  for (size_t r = 0; r < rows.size(); ++r) {
-    const double l = lambda[static_cast<Eigen::Index>(r)];
-    if (rows[r] < me) {
-      lambda_e_[rows[r]] = l;
+  for (int i = 0; i < m; ++i) {
+    if (!ls_unknown_[static_cast<size_t>(i)]) continue;
+    if (i < me) {
+      lambda_e_[i] = ls_lambda_[i];
     } else {
-      lambda_i_[rows[r] - me] = std::max(0.0, l);
+      lambda_i_[i - me] = std::max(0.0, ls_lambda_[i]);
     }
   }
+  return true;
 }
 
 Eigen::MatrixXd Solver::FreeMotions() const {
@@ -464,7 +502,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
         // from a start 9 cm off it was led to a pose of zero dexterity.)
         if (lambda_e_.isZero(0.0) && lambda_i_.isZero(0.0) && grad_e_.allFinite() &&
             Violation() <= 1e3 * options_.constraint_tolerance) {
-          LeastSquaresMultipliers();
+          LeastSquaresMultipliers(/*need_inequality=*/false);
         }
       }
       if (grad_e_.allFinite()) UpdateDesignCurvature(q);
@@ -529,6 +567,17 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
             options_.time_budget_us) {
       st.budget_exhausted = true;
       break;
+    }
+    // Contacts touching unloaded (c ≈ 0, λ = 0) at the start of a solve that must move: their
+    // multipliers from the least-squares balance of ∇E, so the first Newton matrix has their
+    // curvature (−λ∇²c). Without it a body hanging on such contacts has only least astonishment
+    // against turning, and the first step turns it as far as the trust region allows (measured
+    // on the paperclip chain pulled from rest: see LeastSquaresMultipliers).
+    if (!design && st.iterations == 0 && grad_e_.allFinite() &&
+        LeastSquaresMultipliers(/*need_inequality=*/true)) {
+      kkt_ = grad_e_;
+      ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &kkt_);
+      ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, &kkt_);
     }
     // The inequalities' active set is the step's own (a primal-dual active-set, i.e. semismooth
     // Newton, iteration on λ⁺ = max(0, λ − μ(c + JΔq))): guessed from the multipliers and the

@@ -156,9 +156,13 @@ class Solver {
   /// The constraints' Jacobian at the last Evaluate, dense: equality rows, then inequality rows
   /// (offline: allocates).
   Eigen::MatrixXd DenseConstraintJacobian() const;
-  /// Design mode, a cold start: the multipliers that best balance ∇E at q (least squares over
-  /// the equalities and the inequalities at their bound, those with λ < 0 dropped).
-  void LeastSquaresMultipliers();
+  /// Multipliers for the rows that have none yet: the equalities with λ = 0 and the
+  /// inequalities at their bound (c ≤ tolerance) with λ = 0 get the values that best balance ∇E
+  /// at q with the other rows' multipliers held (least squares; an inequality that comes out
+  /// pulling is dropped). A design solve's cold start, and a servo solve whose contacts touch
+  /// unloaded. Allocation free. need_inequality: only if an inequality row is among them.
+  /// @return whether any row was estimated.
+  bool LeastSquaresMultipliers(bool need_inequality);
   bool StepWithinTrustRegion() const;
   /// Design mode: the BFGS update of B_ with the step from q_old_ to q and the change of the
   /// design gradient (gd_ − gd_old_).
@@ -194,6 +198,11 @@ class Solver {
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>
       ldlt_;
   std::vector<char> active_;  ///< inequality rows in the current step's active set
+  // LeastSquaresMultipliers' storage (all rows: equalities, then inequalities).
+  Eigen::MatrixXd ls_J_, ls_part_e_, ls_part_i_, ls_G_, ls_JJt_;
+  Eigen::VectorXd ls_r_, ls_Jr_, ls_rhs_, ls_lambda_;
+  Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> ls_ldlt_;
+  std::vector<char> ls_unknown_;
   double mu_ = 0.0;
   // Design mode only (empty otherwise): the BFGS model of the design objectives' curvature, the
   // design gradient now and at the previous iterate, and that iterate.
