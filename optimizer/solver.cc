@@ -149,15 +149,26 @@ void Solver::UpdateDesignCurvature(const Eigen::VectorXd& q) {
   have_old_ = true;
 }
 
-Eigen::MatrixXd Solver::DenseConstraintJacobian() const {
+void Solver::KktResidual(Eigen::VectorXd* r) const {
+  *r = grad_e_;
+  ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, r);
+  ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, r);
+}
+
+void Solver::FillConstraintJacobian(Eigen::MatrixXd* J, Eigen::MatrixXd* part_e,
+                                    Eigen::MatrixXd* part_i) const {
   // Assembled from the terms' blocks (it used to be column by column from Jacobian products:
   // n passes over every term).
-  const int me = ev_.c_e().size(), mi = ev_.c_i().size();
-  Eigen::MatrixXd J(me + mi, n_), part;
-  ev_.DenseJacobian(ProblemEvaluator::kEquality, &part);
-  J.topRows(me) = part;
-  ev_.DenseJacobian(ProblemEvaluator::kInequality, &part);
-  J.bottomRows(mi) = part;
+  ev_.DenseJacobian(ProblemEvaluator::kEquality, part_e);
+  ev_.DenseJacobian(ProblemEvaluator::kInequality, part_i);
+  J->resize(part_e->rows() + part_i->rows(), n_);  // (no allocation when already this shape)
+  J->topRows(part_e->rows()) = *part_e;
+  J->bottomRows(part_i->rows()) = *part_i;
+}
+
+Eigen::MatrixXd Solver::DenseConstraintJacobian() const {
+  Eigen::MatrixXd J, part_e, part_i;
+  FillConstraintJacobian(&J, &part_e, &part_i);
   return J;
 }
 
@@ -185,13 +196,8 @@ bool Solver::LeastSquaresMultipliers(bool need_inequality) {
     any_inequality = any_inequality || (unknown && i >= me);
   }
   if (!any || (need_inequality && !any_inequality)) return false;
-  ev_.DenseJacobian(ProblemEvaluator::kEquality, &ls_part_e_);
-  ev_.DenseJacobian(ProblemEvaluator::kInequality, &ls_part_i_);
-  ls_J_.topRows(me) = ls_part_e_;
-  ls_J_.bottomRows(mi) = ls_part_i_;
-  ls_r_ = grad_e_;
-  ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &ls_r_);
-  ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, &ls_r_);
+  FillConstraintJacobian(&ls_J_, &ls_part_e_, &ls_part_i_);
+  KktResidual(&ls_r_);
   ls_G_.setZero();
   ls_G_.selfadjointView<Eigen::Lower>().rankUpdate(ls_J_);
   ls_Jr_.noalias() = ls_J_ * ls_r_;
@@ -508,9 +514,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
       if (grad_e_.allFinite()) UpdateDesignCurvature(q);
     }
     st.max_violation = Violation();
-    kkt_ = grad_e_;  // ∇E − J_Eᵀλ_E − J_Iᵀλ_I at the current multipliers.
-    ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &kkt_);
-    ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, &kkt_);
+    KktResidual(&kkt_);
     st.kkt_residual = MaxAbs(kkt_);
     if (design) {
       // A stalled solve (the KKT residual not halved in 10 iterations): the BFGS model has
@@ -575,9 +579,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     // on the paperclip chain pulled from rest: see LeastSquaresMultipliers).
     if (!design && st.iterations == 0 && grad_e_.allFinite() &&
         LeastSquaresMultipliers(/*need_inequality=*/true)) {
-      kkt_ = grad_e_;
-      ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &kkt_);
-      ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, &kkt_);
+      KktResidual(&kkt_);
     }
     // The inequalities' active set is the step's own (a primal-dual active-set, i.e. semismooth
     // Newton, iteration on λ⁺ = max(0, λ − μ(c + JΔq))): guessed from the multipliers and the
@@ -641,9 +643,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     ev_.ObjectiveGradient(q, q_prev_, M_, &grad_e_);
     st.max_violation = Violation();
     st.complementarity = Complementarity();
-    kkt_ = grad_e_;
-    ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, &kkt_);
-    ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, &kkt_);
+    KktResidual(&kkt_);
     st.kkt_residual = MaxAbs(kkt_);
   }
   if (!st.converged && best_score < std::numeric_limits<double>::infinity()) {

@@ -156,6 +156,12 @@ class Solver {
   /// The constraints' Jacobian at the last Evaluate, dense: equality rows, then inequality rows
   /// (offline: allocates).
   Eigen::MatrixXd DenseConstraintJacobian() const;
+  /// The same into *J, through the per-kind blocks *part_e and *part_i (allocation free once
+  /// they have their shapes).
+  void FillConstraintJacobian(Eigen::MatrixXd* J, Eigen::MatrixXd* part_e,
+                              Eigen::MatrixXd* part_i) const;
+  /// ∇E − J_Eᵀλ_E − J_Iᵀλ_I at the last Evaluate and the current multipliers.
+  void KktResidual(Eigen::VectorXd* r) const;
   /// Multipliers for the rows that have none yet: the equalities with λ = 0 and the
   /// inequalities at their bound (c ≤ tolerance) with λ = 0 get the values that best balance ∇E
   /// at q with the other rows' multipliers held (least squares; an inequality that comes out
