@@ -11,21 +11,31 @@
 #   * every wrench the phantom received is finite, within max_force and within the rate limit
 #     of the one before on the server's clock (phantom: over_max_force, over_rate_limit);
 #   * the fault shows in the server's own counters (below) and its log;
-#   * service resumed by itself: 90 % of the states sent in the last second were answered.
-# The answered fraction and the round trip during the fault are measured from the phantom's
-# per-step log and reported as they are. Logs: build/faults/<fault>/. Table: build/faults/table.md.
+#   * the accounting closes by counter (scripts/lib/accounting.sh);
+#   * service resumed by itself, within a bound the protocol sets, not the machine's speed: a
+#     state sent within one ramp time (the scene's ramp_time, 1 s) of the fault's end was
+#     answered, and so was one sent in the run's last second.
+# The full run (the documented command) also judges throughput: 90 % of the states sent in the
+# last second answered. --smoke (ctest's faults_smoke, on whatever machine runs the tests)
+# reports that figure without judging it (docs/reliability.md, "What the real-time tests
+# assert"). The answered fraction and the round trip during the fault are measured from the
+# phantom's per-step log and reported as they are. Logs: build/faults/<fault>/. Table:
+# build/faults/table.md.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${TANGENT_BUILD_DIR:-$root/build}
 # shellcheck source=lib/live_server.sh
 source "$root/scripts/lib/live_server.sh"
+# shellcheck source=lib/accounting.sh
+source "$root/scripts/lib/accounting.sh"
 in_private_netns "$0" "$@"
 
-duration=8 fault_len=1.5 memory_cap_mib=512
+duration=8 fault_len=1.5 memory_cap_mib=512 judge_throughput=1
+resume_bound_s=1.0  # the scene's ramp_time: a restarted client is served within it too
 faults=()
 for a in "$@"; do
   case $a in
-    --smoke) duration=5 fault_len=0.5 memory_cap_mib=256 ;;
+    --smoke) duration=5 fault_len=0.5 memory_cap_mib=256 judge_throughput= ;;
     cpu_hog|memory|global_stall|contact_burst|lcm_down|stop_client|stop_server) faults+=("$a") ;;
     *) echo "faults.sh: unknown argument '$a'" >&2; exit 2 ;;
   esac
@@ -103,10 +113,10 @@ EOF
   local from to
   from=$(awk -v a="$fault_start" -v b="$t0" 'BEGIN { print a - b }')
   to=$(awk -v a="$fault_end" -v b="$t0" 'BEGIN { print a - b }')
-  verdict=$(python3 - "$dir/phantom.csv" "$run" "$from" "$to" <<'EOF'
+  verdict=$(python3 - "$dir/phantom.csv" "$run" "$from" "$to" "$resume_bound_s" <<'EOF'
 import csv, sys
 rows = list(csv.DictReader(open(sys.argv[1])))
-duration, start, end = float(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4])
+duration, start, end, bound = map(float, sys.argv[2:6])
 def window(lo, hi):
     sent = {int(r["seq"]) for r in rows if lo <= float(r["t"]) < hi}
     answered, lat = set(), []
@@ -120,11 +130,13 @@ def window(lo, hi):
     return len(sent), len(answered), q(0.5), q(0.99)
 s, a, p50, p99 = window(start, end)
 s2, a2, _, _ = window(duration - 1.2, duration - 0.2)  # the last second (answers in flight at the end left out)
+s3, a3, _, _ = window(end, end + bound)  # within the protocol's bound of the fault's end
 print(f"{a}/{s} ({100 * a / max(s, 1):.0f} %, {end - start:.1f} s)|{p50:.2f} / {p99:.2f}|{a2}/{s2}|"
-      f"{int(a2 >= 0.9 * s2 and s2 > 0 and end < duration - 1.2)}")
+      f"{int(a2 >= 0.9 * s2 and s2 > 0 and end < duration - 1.2)}|"
+      f"{int(a3 >= 1 and a2 >= 1 and end + bound <= duration - 0.2)}|{a3}/{s3}")
 EOF
 )
-  IFS='|' read -r during rtt resumed resumed_ok <<< "$verdict"
+  IFS='|' read -r during rtt resumed throughput_ok resumed_ok resumed_soon <<< "$verdict"
   local fmax over_max over_rate
   fmax=$(value "$dir/phantom.out" wrench_force_max_n)
   over_max=$(value "$dir/phantom.out" over_max_force)
@@ -138,7 +150,11 @@ EOF
   [ "$(value "$dir/phantom.out" bad_wrenches)" = 0 ] || problems+=("non-finite wrenches")
   [ "$over_max" = 0 ] || problems+=("$over_max wrenches above max_force")
   [ "$over_rate" = 0 ] || problems+=("$over_rate force steps beyond the rate limit")
-  [ "$resumed_ok" = 1 ] || problems+=("service did not resume: $resumed answered in the last second")
+  [ "$resumed_ok" = 1 ] || problems+=("service did not resume: $resumed_soon answered within ${resume_bound_s} s of the fault's end, $resumed in the last second")
+  [ -z "$judge_throughput" ] || [ "$throughput_ok" = 1 ] ||
+    problems+=("throughput did not recover: $resumed answered in the last second (criterion 90 %)")
+  check_accounting "$dir/server.out" "$dir/phantom.out" > "$dir/accounting.txt" ||
+    problems+=("$(tail -1 "$dir/accounting.txt")")
   case $fault in
     global_stall) [ "$(value "$dir/server.out" global_stalls)" -ge 3 ] || problems+=("stalls not counted")
                   grep -q "global stage stalled" "$dir/tangentd.log" || problems+=("stall not logged") ;;
@@ -150,7 +166,9 @@ EOF
     echo "FAIL $fault: ${problems[*]} (logs in $dir)"
     failures=$((failures + 1))
   else
-    echo "ok   $fault: answered $during during, round trip $rtt ms, $counters"
+    echo "ok   $fault: answered $during during, round trip $rtt ms, $counters;" \
+      "$resumed_soon answered within ${resume_bound_s} s of the fault's end, $resumed in the last second"
+    echo "     $(head -1 "$dir/accounting.txt")"
   fi
 }
 

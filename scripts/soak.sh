@@ -10,13 +10,19 @@
 #     fraction, the loop rate and the tick p99 of the last minute within 10 % / 25 % of the first;
 #   * the violation and force statistics of the last minute the same as the first's (max
 #     violation below 1e-9 m in both; mean |F| within 10 %: the trajectory repeats exactly).
+#   * the accounting closes by counter (scripts/lib/accounting.sh), and (throughput) ≥ 95 % of
+#     the accepted states were answered.
 # Writes build/soak/ (logs, rss.csv, report.md). A short run (--minutes 0.5) is ctest's
-# soak_smoke: it checks the script and the accounting, not the drift (a minute is the window).
+# soak_smoke: it checks the script, memory, the safety rows and the accounting; the drift and
+# throughput rows, which need the long run's windows and a quiet machine, are reported, not judged
+# (docs/reliability.md, "What the real-time tests assert").
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${TANGENT_BUILD_DIR:-$root/build}
 # shellcheck source=lib/live_server.sh
 source "$root/scripts/lib/live_server.sh"
+# shellcheck source=lib/accounting.sh
+source "$root/scripts/lib/accounting.sh"
 in_private_netns "$0" "$@"
 
 minutes=30
@@ -47,10 +53,12 @@ wait "$phantom"
 kill -INT "$server"
 wait "$server"
 trap - EXIT
+accounting_closed=1
+check_accounting "$out/server.out" "$out/phantom.out" > "$out/accounting.txt" || accounting_closed=0
 
-python3 - "$out" "$minutes" <<'EOF'
+python3 - "$out" "$minutes" "$accounting_closed" <<'EOF'
 import re, sys
-out, minutes = sys.argv[1], float(sys.argv[2])
+out, minutes, accounting_closed = sys.argv[1], float(sys.argv[2]), sys.argv[3] == "1"
 def summary(name):
     return dict(l.strip().split("=", 1) for l in open(f"{out}/{name}.out") if re.match(r"^\w+=", l))
 server, phantom = summary("server"), summary("phantom")
@@ -80,27 +88,39 @@ growth_kb = rss[-1][1] - rss_warm
 answered = int(phantom["answered"]) / max(int(server["device_messages"]), 1)
 drift = minutes >= 3  # shorter runs (soak_smoke) report the drift figures without judging them
 checks = [
-    ("RSS growth after warm-up ≤ 1 MB", growth_kb <= 1024 or not drift, f"{growth_kb:.0f} kB ({rss_warm:.0f} → {rss[-1][1]:.0f} kB)"),
+    ("RSS growth after warm-up ≤ 1 MB", growth_kb <= 1024, f"{growth_kb:.0f} kB ({rss_warm:.0f} → {rss[-1][1]:.0f} kB)"),
     ("0 faults", server["faults"] == "0", server["faults"]),
     ("0 device timeouts while the client ran", timeouts_in_run == 0,
      f'{timeouts_in_run} (the one at the end, when the client stops, is not counted)'),
     ("0 wrenches over max_force or the rate limit", phantom["over_max_force"] == "0" and phantom["over_rate_limit"] == "0",
      f'{phantom["over_max_force"]} / {phantom["over_rate_limit"]}'),
+    ("accounting closes: sent = accepted + rejected + lost; answers ≤ the server's", accounting_closed,
+     " ".join(open(f"{out}/accounting.txt").read().split())),
     ("answered ≥ 95 % of accepted", answered >= 0.95, f"{100 * answered:.2f} %"),
-    ("loop rate: last within 10 % of first", abs(last["rate"] / first["rate"] - 1) <= 0.10 or not drift, f'{first["rate"]:.0f} → {last["rate"]:.0f} Hz'),
-    ("tick p99 (median of the seconds): last within 25 % of first", last["p99"] <= 1.25 * first["p99"] + 1.0 or not drift, f'{first["p99"]:.1f} → {last["p99"]:.1f} µs'),
-    ("device states accepted per second: last within 10 % of first", abs(last["accepted_per_s"] / first["accepted_per_s"] - 1) <= 0.10 or not drift,
+    ("loop rate: last within 10 % of first", abs(last["rate"] / first["rate"] - 1) <= 0.10, f'{first["rate"]:.0f} → {last["rate"]:.0f} Hz'),
+    ("tick p99 (median of the seconds): last within 25 % of first", last["p99"] <= 1.25 * first["p99"] + 1.0, f'{first["p99"]:.1f} → {last["p99"]:.1f} µs'),
+    ("device states accepted per second: last within 10 % of first", abs(last["accepted_per_s"] / first["accepted_per_s"] - 1) <= 0.10,
      f'{first["accepted_per_s"]:.0f} → {last["accepted_per_s"]:.0f} /s'),
     ("max violation below 1e-9 m in both", first["violation"] < 1e-9 and last["violation"] < 1e-9, f'{first["violation"]:.1e} → {last["violation"]:.1e} m'),
-    ("mean |F|: last within 10 % of first", abs(last["force"] - first["force"]) <= 0.10 * first["force"] + 0.01 or not drift, f'{first["force"]:.3f} → {last["force"]:.3f} N'),
+    ("mean |F|: last within 10 % of first", abs(last["force"] - first["force"]) <= 0.10 * first["force"] + 0.01, f'{first["force"]:.3f} → {last["force"]:.3f} N'),
 ]
 lines = [f"Soak: {minutes:g} min of the looped drag on the paperclips; windows of {window:.0f} s "
          f"(first after {warm:.0f} s of warm-up, last at the end).", "",
          "| check | result | figures |", "| --- | --- | --- |"]
-lines += [f"| {name} | {'pass' if ok else 'FAIL'} | {fig} |" for name, ok, fig in checks]
+# The drift and throughput rows need the long run's windows and a quiet machine: a short run
+# (soak_smoke, on whatever machine runs the tests) reports them without judging. Memory, safety
+# and the accounting are judged in every run.
+long_run_only = {"answered ≥ 95 % of accepted",
+                 "loop rate: last within 10 % of first",
+                 "tick p99 (median of the seconds): last within 25 % of first",
+                 "device states accepted per second: last within 10 % of first",
+                 "mean |F|: last within 10 % of first"}
+judged = [(name, ok, fig, drift or name not in long_run_only) for name, ok, fig in checks]
+verdict = lambda ok, j: ("pass" if ok else "FAIL") if j else "reported"
+lines += [f"| {name} | {verdict(ok, j)} | {fig} |" for name, ok, fig, j in judged]
 if not drift:
-    lines += ["", "(A short run: the drift rows are reported, not judged.)"]
+    lines += ["", "(A short run: the drift and throughput rows are reported, not judged.)"]
 open(f"{out}/report.md", "w").write("\n".join(lines) + "\n")
 print("\n".join(lines))
-sys.exit(0 if all(ok for _, ok, _ in checks) else 1)
+sys.exit(0 if all(ok or not j for _, ok, _, j in judged) else 1)
 EOF

@@ -66,8 +66,12 @@ struct Receiver {
   double max_force = 3.3, max_force_rate = 500.0;
   double wrench_force_max = 0.0, worst_rate_excess = 0.0;
   int64_t over_max = 0, over_rate = 0;
+  // A silent device's force only falls: timeout wrenches (state 2) whose |F| rose above the
+  // wrench before them (docs/server.md, "Device sessions").
+  int64_t timeout_force_rises = 0;
   double last_force[3] = {0, 0, 0};
   int64_t last_server_utime = 0;
+  int last_state = -1;
   bool have_last = false;
   std::atomic<int64_t> first_answer_ns{0};
   int64_t device_id = 1, session = 0;
@@ -127,9 +131,15 @@ struct Receiver {
       const double excess = std::sqrt(step2) - max_force_rate * std::max(dt, 0.0);
       worst_rate_excess = std::max(worst_rate_excess, excess);
       if (excess > 1e-9) ++over_rate;
+      const double last = std::sqrt(last_force[0] * last_force[0] + last_force[1] * last_force[1] +
+                                    last_force[2] * last_force[2]);
+      // (The ramp scales the force by factors ≤ 1: in exact arithmetic it never rises; 1e-12 N
+      // is far above the rounding of that product, far below any force a hand could feel.)
+      if (m->state == 2 && last_state == 2 && f > last + 1e-12) ++timeout_force_rises;
     }
     std::memcpy(last_force, m->force, sizeof(last_force));
     last_server_utime = m->server_utime;
+    last_state = m->state;
     have_last = true;
   }
   void OnPong(const void* data, uint32_t size) {
@@ -365,9 +375,10 @@ void PrintSummary(const PhantomOptions& o, const HandTrajectory& hand, const Rec
               bound);
   std::printf(
       "wrench_force_max_n=%.4f\nover_max_force=%lld\nover_rate_limit=%lld\n"
-      "worst_rate_excess_n=%.2e\n",
+      "worst_rate_excess_n=%.2e\ntimeout_force_rises=%lld\n",
       rx.wrench_force_max, static_cast<long long>(rx.over_max),
-      static_cast<long long>(rx.over_rate), rx.worst_rate_excess);
+      static_cast<long long>(rx.over_rate), rx.worst_rate_excess,
+      static_cast<long long>(rx.timeout_force_rises));
   std::printf("loop_rate_hz=%.0f\ncontacts=%d\n", rx.loop_rate.load(), rx.contacts.load());
   const bool stable = passive && smooth && answered > 0;
   std::printf("verdict=%s\n", stable ? "STABLE" : "UNSTABLE");

@@ -3,11 +3,16 @@
 # private network namespace (user namespace, loopback up, multicast routed to it): nothing
 # touches the host's network and tests can run side by side.
 #   integration.sh CASE TANGENTD PHANTOM SCENES_DIR   CASE: demo | timeout | rejected | restart
-# ctest runs these serially (RUN_SERIAL): each needs both cores quiet. The pass criteria count
-# against what reached the server (its own accounting), so a state the kernel dropped under
-# load is reported, not mistaken for a server fault; what the server accepted it must answer.
+# ctest runs these serially (RUN_SERIAL). The pass criteria are those that hold on any machine,
+# however slow or loaded (docs/reliability.md, "What the real-time tests assert"): every wrench
+# finite, within max_force and the rate limit, no fault, the accounting closed by counter
+# (scripts/lib/accounting.sh), each case's protocol behaviour (a timeout seen, every bad state
+# rejected for its reason, a restarted client served within one ramp). What the machine's speed
+# decides (states answered per second, round trip) is printed, and judged by the benchmarks.
 set -euo pipefail
 case_name=$1 tangentd=$2 phantom=$3 scenes=$4
+# shellcheck source=../../scripts/lib/accounting.sh
+source "$(cd "$(dirname "$0")/../.." && pwd)/scripts/lib/accounting.sh"
 
 if [ -z "${TANGENT_IN_NETNS:-}" ]; then
   export TANGENT_IN_NETNS=1
@@ -58,9 +63,8 @@ grep ": violation " "$work/tangentd.log" | head -5 || true
 
 value() { grep -m1 "^$2=" "$work/$1.out" | cut -d= -f2; }
 fail() { echo "FAIL: $*"; exit 1; }
-# Under a sanitizer (scripts/tsan.sh sets TANGENT_SANITIZER_RUN) any report fails the case and
-# the criteria that measure speed are left out: an instrumented server is several times slower.
-sanitized=${TANGENT_SANITIZER_RUN:-}
+# Under a sanitizer (scripts/tsan.sh) any report fails the case. No criterion here measures
+# speed, so an instrumented server, several times slower, is held to all of them.
 outputs=("$work/server.out" "$work/phantom.out")
 [ ! -f "$work/first.out" ] || outputs+=("$work/first.out")
 reports="ThreadSanitizer|AddressSanitizer|LeakSanitizer|runtime error:"
@@ -71,12 +75,11 @@ fi
 [ "$status" -eq 0 ] || fail "tangentd exited with $status on SIGINT"
 grep -q "^tangentd summary:" "$work/server.out" || fail "no tangentd summary"
 sent=$(value phantom sent)
-answered=$(value phantom answered)
-accepted=$(value server device_messages)
 force_max=$(value phantom force_max_n)
-echo "accounting: phantom sent $sent; server accepted $accepted, rejected" \
-  "$(grep -E "^rejected_" "$work/server.out" | tr '\n' ' ')lost before the filter" \
-  "$(value server lost_before_filter), unanswered $(value server unanswered); phantom answered $answered"
+echo "rejected by reason: $(grep -E "^rejected_" "$work/server.out" | tr '\n' ' ')"
+clients=("$work/phantom.out")
+[ ! -f "$work/first.out" ] || clients+=("$work/first.out")
+check_accounting "$work/server.out" "${clients[@]}" || fail "the accounting (above)"
 awk -v f="$force_max" 'BEGIN { exit !(f <= 3.3 + 1e-9) }' || fail "force $force_max above 3.3 N"
 [ "$(value phantom bad_wrenches)" -eq 0 ] || fail "non-finite wrench received"
 [ "$(value phantom over_max_force)" -eq 0 ] || fail "$(value phantom over_max_force) wrenches above max_force"
@@ -87,22 +90,30 @@ case $case_name in
   demo)
     [ "$(value phantom verdict)" = STABLE ] || fail "interaction not stable"
     [ "$(value server contacts)" -ge 1 ] || fail "no contact tracked"
-    [ -z "$sanitized" ] || { echo "PASS: $case_name (sanitized: speed criteria left out)"; exit 0; }
-    [ "$accepted" -ge 4000 ] || fail "only $accepted of $sent device states reached the server"
-    awk -v a="$answered" -v s="$accepted" 'BEGIN { exit !(a >= 0.95 * s) }' ||
-      fail "only $answered of the $accepted accepted device states answered"
     ;;
   timeout)
     [ "$(value server device_timeouts)" -ge 1 ] || fail "the 1 s silence was not seen as a timeout"
-    # The server ramps the force down with timeout wrenches (state 2), one per millisecond.
-    [ "$(value phantom timeout_wrenches)" -ge 100 ] ||
-      fail "only $(value phantom timeout_wrenches) timeout wrenches during the silence"
+    # The server ramps the force down with timeout wrenches (state 2), one per device period
+    # while its servo runs (how many is the machine's: reported); none raises the force.
+    echo "timeout wrenches during the 1 s silence: $(value phantom timeout_wrenches) (reported)"
+    [ "$(value phantom timeout_wrenches)" -ge 1 ] || fail "no timeout wrench during the silence"
+    [ "$(value phantom timeout_force_rises)" -eq 0 ] ||
+      fail "$(value phantom timeout_force_rises) timeout wrenches raised the force"
     ;;
   rejected)
     for reason in non_finite quaternion sequence jump workspace; do
       [ "$(value server rejected_$reason)" -ge 1 ] || fail "no message rejected as $reason"
     done
-    [ "$accepted" -ge 3000 ] || fail "good messages were lost"
+    # Every 10th state is bad (tangent-phantom --inject-bad 10): each is rejected, unless it
+    # never arrived (then it left a gap), and no good state is rejected.
+    injected=$((sent / 10))
+    rejected=0
+    for reason in non_finite quaternion sequence jump workspace device session; do
+      rejected=$((rejected + $(value server rejected_$reason)))
+    done
+    [ "$rejected" -le "$injected" ] || fail "$rejected states rejected, $injected were bad"
+    [ $((rejected + $(value server lost_before_filter))) -ge "$injected" ] ||
+      fail "$injected bad states sent, $rejected rejected and $(value server lost_before_filter) lost"
     ;;
   restart)
     [ "$(value server sessions)" -eq 2 ] || fail "$(value server sessions) sessions, expected 2"
@@ -110,9 +121,6 @@ case $case_name in
     first_ms=$(value phantom first_answer_ms)
     awk -v t="$first_ms" 'BEGIN { exit !(t >= 0 && t <= 1000) }' ||
       fail "the restarted client waited $first_ms ms for its first answer (ramp time 1 s)"
-    [ -z "$sanitized" ] || { echo "PASS: $case_name (sanitized: speed criteria left out)"; exit 0; }
-    awk -v a="$answered" -v s="$sent" 'BEGIN { exit !(a >= 0.9 * s) }' ||
-      fail "the restarted client got only $answered answers to $sent states"
     ;;
 esac
 echo "PASS: $case_name"
