@@ -4,6 +4,7 @@
 
 #include <sched.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/types.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -304,6 +305,10 @@ class ViewServer {
     if (pid < 0) return false;
     if (pid == 0) {
       setpgid(0, 0);  // (the browser inherits the view's scheduling class: see Main)
+      // A view killed outright (a test's timeout, SIGKILL) leaves no browser behind: it would
+      // hold a core and its profile's lock.
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (getppid() == 1) _exit(0);  // the view died before the line above
       // The browser's own chatter (GPU, DBus) is not ours to print.
       if (FILE* null = std::fopen("/dev/null", "w")) {
         dup2(fileno(null), 1);
@@ -510,6 +515,17 @@ int Main(int argc, char** argv) {
       std::fprintf(stderr, "tangent-view: could not switch to SCHED_IDLE (%s); running normal\n",
                    std::strerror(errno));
     }
+  }
+
+  // The page imports three.js from npm (index.html's import map): without it a browser would
+  // load a page that never connects, and a snapshot would only time out.
+  const std::string three = o.web_root + "/node_modules/three/build/three.module.js";
+  if (!std::filesystem::exists(three)) {
+    std::fprintf(stderr,
+                 "tangent-view: %s is missing (three.js comes from npm: run "
+                 "scripts/install-web.sh)\n",
+                 three.c_str());
+    return 2;
   }
 
   std::unique_ptr<server::Scene> scene;
