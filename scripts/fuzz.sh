@@ -2,7 +2,7 @@
 # Fuzzes the scene parser, the NURBS JSON reader, the run-file parser, the server's
 # device-message path and the CAD import (STEP/IGES through Open CASCADE) with libFuzzer (clang from Debian), AddressSanitizer and
 # UndefinedBehaviorSanitizer (docs/reliability.md "Fuzzing").
-#   bash scripts/fuzz.sh [--seconds N] [--seed S] [scene surface run device cad]
+#   bash scripts/fuzz.sh [--seconds N] [--seed S] [--build-only] [scene surface run device cad]
 # Builds build-fuzz/ (clang, the four fuzz targets and the libraries they need), seeds each
 # target's corpus (build-fuzz/corpus/<target>, kept between runs so coverage accumulates) from
 # scenes/, the seed writer and the kept findings (fuzz/regressions/<target>), then runs each
@@ -10,17 +10,21 @@
 # than 2 GB, an uncaught exception or a sanitizer report stops that target: its input is written
 # to build-fuzz/findings/<target>/ and the script exits non-zero after the others ran. Keep a
 # finding as a regression: copy it to fuzz/regressions/<target>/ (ctest replays it).
+# --build-only stops after the build (scripts/test.sh builds the fuzzers at nice 19 while ctest
+# runs, so the build takes only what the tests leave of the two cores).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=600
 seed_args=()
 targets=()
+build_only=
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds=$2; shift 2 ;;
     --seed) seed_args=(-seed="$2"); shift 2 ;;  # libFuzzer's mutation seed (CI: fixed)
+    --build-only) build_only=1; shift ;;
     scene|surface|run|device|cad) targets+=("$1"); shift ;;
-    *) echo "fuzz.sh: unknown argument '$1' (expected --seconds N, --seed S or scene|surface|run|device|cad)" >&2
+    *) echo "fuzz.sh: unknown argument '$1' (expected --seconds N, --seed S, --build-only or scene|surface|run|device|cad)" >&2
        exit 2 ;;
   esac
 done
@@ -41,6 +45,7 @@ seeders=(tangent-fuzz-seeds)
 [[ " ${targets[*]} " == *" cad "* ]] && seeders+=(tangent-cad-seeds)
 cmake --build build-fuzz --parallel "$(nproc)" --target "${seeders[@]}" \
   "${targets[@]/%/_fuzzer}"
+[ -z "$build_only" ] || exit 0
 
 # Open CASCADE's one-time allocations (static registries, never freed by design) are not ours.
 export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp"

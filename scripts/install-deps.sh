@@ -31,6 +31,8 @@ packages=(
   clang libclang-rt-14-dev
   # Instructions per servo tick, independent of the machine's load (scripts/bench_report.sh).
   valgrind
+  # A core kept busy by another process (bash scripts/test.sh --under-load).
+  stress-ng
   # The live 3D view (tangent-view): WebSocket server (websocketpp on standalone asio), PNG
   # reading in its browser test, and Chromium for snapshots and the test (headless, software
   # WebGL). three.js comes from npm, pinned by view/web/package-lock.json (scripts/install-web.sh).
