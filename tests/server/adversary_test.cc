@@ -379,8 +379,8 @@ struct Delta {
   int64_t accepted, sessions, undecodable, wrong_type, lost, non_finite, quaternion, workspace,
       device, session, sequence, jump, timeouts, faults, unanswered, wrenches;
   int64_t sent = 0;  ///< states of the served session sent between the two snapshots
-  int64_t published =
-      0;  ///< device states published (every session) between the snapshots' arrivals
+  /// Device states published (every session) between the two snapshots' arrivals.
+  int64_t published = 0;
   double client_pause_ms = 0.0;  ///< the client's longest pause between sends (Harness)
   int64_t timeout_wrenches = 0;  ///< timeout wrenches (state 2) received over the attack
   static Delta Of(const tangent::loop_stats_t& a, const tangent::loop_stats_t& b) {
