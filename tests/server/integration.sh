@@ -104,16 +104,25 @@ case $case_name in
     for reason in non_finite quaternion sequence jump workspace; do
       [ "$(value server rejected_$reason)" -ge 1 ] || fail "no message rejected as $reason"
     done
-    # Every 10th state is bad (tangent-phantom --inject-bad 10): each is rejected, unless it
-    # never arrived (then it left a gap), and no good state is rejected.
-    injected=$((sent / 10))
-    rejected=0
-    for reason in non_finite quaternion sequence jump workspace device session; do
-      rejected=$((rejected + $(value server rejected_$reason)))
+    # Every 10th state is bad (tangent-phantom --inject-bad 10), the kinds in turn: NaN,
+    # quaternion, repeated seq, a 3 cm glitch, outside the workspace. Each bad state of content
+    # is rejected for its reason (unless it never arrived: then it left a gap), and no good
+    # state is rejected for it. A glitch is a jump only on the bridge's clock: one handled 6 ms
+    # after the state before it is plausible, and then the hand's next state is the jump
+    # (DeviceFilterTest), so the jump count is reported, not matched.
+    lost=$(value server lost_before_filter)
+    kind=0
+    for reason in non_finite quaternion sequence jump workspace; do
+      bad=0
+      for ((q = 10; q <= sent; q += 10)); do [ $(((q / 10) % 5)) -ne "$kind" ] || bad=$((bad + 1)); done
+      got=$(value server rejected_$reason)
+      echo "injected $bad as $reason: rejected $got"
+      if [ "$reason" != jump ]; then
+        [ "$got" -le "$bad" ] || fail "$got states rejected as $reason, $bad were sent"
+        [ $((got + lost)) -ge "$bad" ] || fail "$bad $reason states sent, $got rejected, $lost lost"
+      fi
+      kind=$((kind + 1))
     done
-    [ "$rejected" -le "$injected" ] || fail "$rejected states rejected, $injected were bad"
-    [ $((rejected + $(value server lost_before_filter))) -ge "$injected" ] ||
-      fail "$injected bad states sent, $rejected rejected and $(value server lost_before_filter) lost"
     ;;
   restart)
     [ "$(value server sessions)" -eq 2 ] || fail "$(value server sessions) sessions, expected 2"
