@@ -29,12 +29,16 @@ TANGENT_BUILD_DIR=${TANGENT_BUILD_DIR:-build} bash scripts/build.sh -DTANGENT_WE
 # they leave of the two cores (the real-time tests mostly sleep between device periods), and
 # the tests assert only what holds on a loaded machine anyway.
 fuzz_log=${TANGENT_BUILD_DIR:-build}/fuzz-build.log
-nice -n 19 bash scripts/fuzz.sh --build-only > "$fuzz_log" 2>&1 &
-fuzz_build=$!
+setsid nice -n 19 bash scripts/fuzz.sh --build-only > "$fuzz_log" 2>&1 &
+fuzz_build=$!  # (setsid: its own process group, so a failed ctest can stop the whole build)
 status=0
 (cd "${TANGENT_BUILD_DIR:-build}" && ctest --output-on-failure --parallel "$(nproc)" --timeout 600) ||
   status=$?
+if [ "$status" -ne 0 ]; then
+  kill -- "-$fuzz_build" 2>/dev/null || true
+  wait "$fuzz_build" 2>/dev/null || true
+  exit "$status"
+fi
 wait "$fuzz_build" || { cat "$fuzz_log"; echo "test.sh: the fuzz build failed" >&2; exit 1; }
-[ "$status" -eq 0 ] || exit "$status"
 # A short run of every fuzzer (docs/reliability.md), with a fixed seed: the fuzz build cannot rot.
 bash scripts/fuzz.sh --seconds 15 --seed 1
