@@ -77,7 +77,7 @@ class ViewServer {
         model_(scene),
         timeline_(timeline),
         web_(o.web_root, kMaxClientMessageBytes,
-             {[this](ClientId c) { OnOpen(c); }, [this](ClientId c) { clients_.erase(c); },
+             {[this](ClientId c) { OnOpen(c); }, [this](ClientId c) { OnClose(c); },
               [this](ClientId c, const std::string& text) { OnMessage(c, text); }}) {
     for (const DisplayMesh& m : meshes_) mesh_text_[m.hash] = MeshMessage(m).dump();
     if (o.camera.size() == 6) {
@@ -245,7 +245,8 @@ class ViewServer {
     required_utime_ = s.utime;
     requested_poses_ = s.poses;
     awaiting_png_ = true;
-    web_.Send(clients_.begin()->first, json{{"type", "snapshot"}, {"utime", s.utime}}.dump());
+    asked_ = clients_.begin()->first;
+    web_.Send(asked_, json{{"type", "snapshot"}, {"utime", s.utime}}.dump());
   }
 
   void OnPng(const ClientMessage& m) {
@@ -338,6 +339,14 @@ class ViewServer {
   }
 
   // ---- the browser's messages ----
+
+  /// A client gone. If it was the one asked for a snapshot, the next state asks another: a
+  /// client that closed just as the first state came (the order of the two events is the
+  /// machine's) would otherwise leave the snapshot awaited forever (seen under load: 90 s).
+  void OnClose(ClientId id) {
+    clients_.erase(id);
+    if (awaiting_png_ && id == asked_) awaiting_png_ = false;
+  }
 
   void OnOpen(ClientId id) {
     clients_[id] = Client{};
@@ -443,6 +452,7 @@ class ViewServer {
   // Snapshots.
   size_t next_snapshot_ = 0;
   bool awaiting_png_ = false;
+  ClientId asked_ = 0;  ///< the client asked for the PNG awaited
   int64_t required_utime_ = 0;
   std::vector<std::array<double, 7>> requested_poses_, last_snapshot_poses_;
 };
