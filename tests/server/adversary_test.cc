@@ -378,7 +378,6 @@ class ServerEnvironment : public ::testing::Environment {
 struct Delta {
   int64_t accepted, sessions, undecodable, wrong_type, lost, non_finite, quaternion, workspace,
       device, session, sequence, jump, timeouts, faults, unanswered, wrenches;
-  int64_t sent = 0;  ///< states of the served session sent between the two snapshots
   /// Device states published (every session) between the two snapshots' arrivals.
   int64_t published = 0;
   double client_pause_ms = 0.0;  ///< the client's longest pause between sends (Harness)
@@ -420,15 +419,12 @@ Delta Attack(const char* what, const std::function<void()>& attack, double settl
   Harness& h = *g_h;
   int64_t published_before = 0, published_after = 0;
   const tangent::loop_stats_t before = h.FreshStats(&published_before);
-  const int64_t served = h.session;
-  const int64_t sent_before = h.sent(served);
   const size_t from = h.WrenchCount();
   h.ResetGap();
   attack();
   const int64_t settle_start = NowNs();
   h.Hold(h.session, settle_s);
   const tangent::loop_stats_t after = h.FreshStats(&published_after);
-  const int64_t sent_after = h.sent(served);
   h.CheckWrenches(from, what);
   // The constraints over the last part of the settle (after the scene has caught up).
   const auto [violation, contacts] =
@@ -441,7 +437,6 @@ Delta Attack(const char* what, const std::function<void()>& attack, double settl
   EXPECT_EQ(contacts, h.baseline_contacts) << what;
   EXPECT_EQ(after.faults, 0) << what << ": the filter let a state through that broke a tick";
   Delta d = Delta::Of(before, after);
-  d.sent = sent_after - sent_before;
   d.published = published_after - published_before;
   d.client_pause_ms = 1e-6 * static_cast<double>(h.max_gap_ns());
   for (const Received& r : h.WrenchesSince(from)) d.timeout_wrenches += r.w.state == 2;
