@@ -81,7 +81,8 @@ step "FCL on meshes against the tracked contact"
 "$bench/mesh_peer" "${mp_args[@]}" > "$runs/mesh_peer.txt"
 step "instructions per servo tick (callgrind)"
 # Only the ticks are counted (ServoLoop::Tick and what it calls): four per device state.
-valgrind --tool=callgrind --callgrind-out-file="$runs/callgrind.out" \
+# servo_profile starts the instrumentation itself after loading the scene (--instr-atstart=no).
+valgrind --tool=callgrind --instr-atstart=no --callgrind-out-file="$runs/callgrind.out" \
   --toggle-collect='tangent::server::ServoLoop::Tick*' \
   "$bench/servo_profile" --steps "$cg_steps" > "$runs/callgrind_profile.txt" 2> "$runs/callgrind.err"
 echo "$(( 4 * cg_steps ))" > "$runs/callgrind_ticks.txt"
