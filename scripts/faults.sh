@@ -4,7 +4,7 @@
 #   bash scripts/faults.sh [--smoke] [fault ...]
 # faults: cpu_hog memory global_stall contact_burst lcm_down stop_client stop_server (default all)
 # Each fault gets a fresh tangentd (--fault-injection) in a private network namespace and a
-# tangent-phantom run of 8 s (--smoke: 5 s) dragging the paperclips (contact_burst: pressing and
+# tangent-phantom run of 8 s (--smoke: 4 s) dragging the paperclips (contact_burst: pressing and
 # lifting a plate on eight domes, scenes/contact_burst.json). The fault runs from t = 2 s for
 # 1.5 s (--smoke: 0.5 s). Checked for every fault, else the script fails:
 #   * tangentd is still running after the fault and exits 0 on SIGINT with its summary;
@@ -35,7 +35,7 @@ resume_bound_s=1.0  # the scene's ramp_time: a restarted client is served within
 faults=()
 for a in "$@"; do
   case $a in
-    --smoke) duration=5 fault_len=0.5 memory_cap_mib=256 judge_throughput= ;;
+    --smoke) duration=4 fault_len=0.5 memory_cap_mib=256 judge_throughput= ;;
     cpu_hog|memory|global_stall|contact_burst|lcm_down|stop_client|stop_server) faults+=("$a") ;;
     *) echo "faults.sh: unknown argument '$a'" >&2; exit 2 ;;
   esac

@@ -10,8 +10,8 @@
 # than 2 GB, an uncaught exception or a sanitizer report stops that target: its input is written
 # to build-fuzz/findings/<target>/ and the script exits non-zero after the others ran. Keep a
 # finding as a regression: copy it to fuzz/regressions/<target>/ (ctest replays it).
-# --build-only stops after the build (scripts/test.sh builds the fuzzers at nice 19 while ctest
-# runs, so the build takes only what the tests leave of the two cores).
+# --build-only stops after the build. (scripts/test.sh builds and runs the fuzzers for 15 s each
+# at nice 19 while ctest runs, so they take only what the tests leave of the two cores.)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=600
