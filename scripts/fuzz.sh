@@ -6,12 +6,12 @@
 # Builds build-fuzz/ (clang, the four fuzz targets and the libraries they need), seeds each
 # target's corpus (build-fuzz/corpus/<target>, kept between runs so coverage accumulates) from
 # scenes/, the seed writer and the kept findings (fuzz/regressions/<target>), then runs each
-# target for N seconds (default 600). A crash, a hang (> 10 s on one input), an input using more
+# target for N seconds (default 600), as many at once as there are cores. A crash, a hang (> 10 s on one input), an input using more
 # than 2 GB, an uncaught exception or a sanitizer report stops that target: its input is written
 # to build-fuzz/findings/<target>/ and the script exits non-zero after the others ran. Keep a
 # finding as a regression: copy it to fuzz/regressions/<target>/ (ctest replays it).
-# --build-only stops after the build. (scripts/test.sh builds and runs the fuzzers for 15 s each
-# at nice 19 while ctest runs, so they take only what the tests leave of the two cores.)
+# --build-only stops after the build (scripts/test.sh builds the fuzzers at nice 19 while ctest
+# runs, so the build takes only what the tests leave of the two cores).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=600
@@ -61,7 +61,22 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # Inputs up to the largest example (scenes, run files) or a few hundred ticks (device scripts).
 # CAD files: the seeds are 10–40 kB.
 max_len() { case "$1" in device) echo 4096 ;; cad) echo 131072 ;; *) echo 65536 ;; esac; }
-failed=()
+# One target per core at a time (each gets its own core: -timeout is wall-clock time).
+fuzz_one() {
+  local t=$1 corpus=corpus/$1
+  if ./fuzz/${t}_fuzzer "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+      -max_len="$(max_len "$t")" -print_final_stats=1 "${seed_args[@]}" -artifact_prefix="findings/$t/" \
+      > "fuzz-$t.log" 2>&1; then
+    { grep -E "^stat::number_of_executed_units|^stat::peak_rss_mb" "fuzz-$t.log" | tr '\n' ' '
+      echo "-- $t: no finding"; } > "fuzz-$t.summary"
+  else
+    { tail -40 "fuzz-$t.log"
+      echo "-- $t: FINDING in build-fuzz/findings/$t/ (log build-fuzz/fuzz-$t.log)"; } > "fuzz-$t.summary"
+    return 1
+  fi
+}
+jobs_max=$(nproc)
+declare -A pid_of=()
 for t in "${targets[@]}"; do
   corpus=corpus/$t
   mkdir -p "$corpus" "findings/$t"
@@ -74,16 +89,14 @@ for t in "${targets[@]}"; do
   esac
   find "../fuzz/regressions/$t" -type f ! -name .keep -exec cp -n {} "$corpus" \;
   echo "fuzz.sh: $t for ${seconds} s ($(find "$corpus" -type f | wc -l) inputs in the corpus)"
-  if ./fuzz/${t}_fuzzer "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
-      -max_len="$(max_len "$t")" -print_final_stats=1 "${seed_args[@]}" -artifact_prefix="findings/$t/" \
-      > "fuzz-$t.log" 2>&1; then
-    grep -E "^stat::number_of_executed_units|^stat::peak_rss_mb" "fuzz-$t.log" | tr '\n' ' '
-    echo "-- $t: no finding"
-  else
-    tail -40 "fuzz-$t.log"
-    echo "-- $t: FINDING in build-fuzz/findings/$t/ (log build-fuzz/fuzz-$t.log)"
-    failed+=("$t")
-  fi
+  while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do wait -n || true; done
+  fuzz_one "$t" &
+  pid_of[$t]=$!
+done
+failed=()
+for t in "${targets[@]}"; do
+  wait "${pid_of[$t]}" || failed+=("$t")
+  cat "fuzz-$t.summary"
 done
 if [ ${#failed[@]} -gt 0 ]; then
   echo "fuzz.sh: findings in ${failed[*]}" >&2
