@@ -17,30 +17,33 @@ for a in "$@"; do
   esac
 done
 bash scripts/install-deps.sh
+load='' fuzz_build=''
+cleanup() {  # whatever ends the script stops what it started
+  if [ -n "$fuzz_build" ]; then kill -- "-$fuzz_build" 2>/dev/null || true; wait "$fuzz_build" 2>/dev/null || true; fi
+  if [ -n "$load" ]; then kill "$load" 2>/dev/null || true; wait "$load" 2>/dev/null || true; fi
+}
+trap cleanup EXIT
 if [ -n "$under_load" ]; then
   stress-ng --cpu 1 --cpu-method matrixprod --quiet &
   load=$!
-  trap 'kill "$load" 2>/dev/null || true; wait "$load" 2>/dev/null || true' EXIT
   echo "test.sh: one core kept busy by stress-ng --cpu 1 (pid $load) until the tests end"
 fi
+# The fuzzers' clang build (build-fuzz/) runs at nice 19 from here to the end of ctest: it takes
+# only what the build and the tests leave of the two cores (the build's serial links, the
+# real-time tests, which run serially and mostly sleep between device periods), and the tests
+# assert only what holds on a loaded machine anyway. The fuzzers run after the tests, one per
+# core: their -timeout is wall-clock time, which a starved process at nice 19 would exceed on a
+# slow input. (setsid: the build is its own process group, so a failure can stop all of it.)
+mkdir -p build-fuzz
+fuzz_log=build-fuzz/build.log
+setsid nice -n 19 bash scripts/fuzz.sh --build-only > "$fuzz_log" 2>&1 &
+fuzz_build=$!
 bash scripts/check-format.sh
 TANGENT_BUILD_DIR=${TANGENT_BUILD_DIR:-build} bash scripts/build.sh -DTANGENT_WERROR=ON
-# The fuzzers' clang build (build-fuzz/) runs at nice 19 beside the tests: it takes only what
-# they leave of the two cores (the real-time tests run serially and mostly sleep between device
-# periods), and the tests assert only what holds on a loaded machine anyway. The fuzzers run
-# after the tests, one per core: their -timeout is wall-clock time, which a starved process at
-# nice 19 would exceed on a slow input.
-fuzz_log=${TANGENT_BUILD_DIR:-build}/fuzz-build.log
-setsid nice -n 19 bash scripts/fuzz.sh --build-only > "$fuzz_log" 2>&1 &
-fuzz_build=$!  # (setsid: its own process group, so a failed ctest can stop the whole build)
+(cd "${TANGENT_BUILD_DIR:-build}" && ctest --output-on-failure --parallel "$(nproc)" --timeout 600)
 status=0
-(cd "${TANGENT_BUILD_DIR:-build}" && ctest --output-on-failure --parallel "$(nproc)" --timeout 600) ||
-  status=$?
-if [ "$status" -ne 0 ]; then
-  kill -- "-$fuzz_build" 2>/dev/null || true
-  wait "$fuzz_build" 2>/dev/null || true
-  exit "$status"
-fi
-wait "$fuzz_build" || { cat "$fuzz_log"; echo "test.sh: the fuzz build failed" >&2; exit 1; }
+wait "$fuzz_build" || status=$?
+fuzz_build=''
+if [ "$status" -ne 0 ]; then cat "$fuzz_log"; echo "test.sh: the fuzz build failed" >&2; exit 1; fi
 # A short run of every fuzzer (docs/reliability.md), with a fixed seed: the fuzz build cannot rot.
 bash scripts/fuzz.sh --seconds 15 --seed 1
