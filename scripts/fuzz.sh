@@ -3,11 +3,11 @@
 # device-message path and the CAD import (STEP/IGES through Open CASCADE) with libFuzzer (clang from Debian), AddressSanitizer and
 # UndefinedBehaviorSanitizer (docs/reliability.md "Fuzzing").
 #   bash scripts/fuzz.sh [--seconds N] [--seed S] [--build-only] [scene surface run device cad]
-# Builds build-fuzz/ (clang, the four fuzz targets and the libraries they need), seeds each
+# Builds build-fuzz/ (clang, the fuzz targets asked for and the libraries they need), seeds each
 # target's corpus (build-fuzz/corpus/<target>, kept between runs so coverage accumulates) from
 # scenes/, the seed writer and the kept findings (fuzz/regressions/<target>), then runs each
-# target for N seconds (default 600), as many at once as there are cores. A crash, a hang (> 10 s on one input), an input using more
-# than 2 GB, an uncaught exception or a sanitizer report stops that target: its input is written
+# target for N seconds (default 600), one per core at a time. A crash, a hang (> 10 s on one
+# input), an input using more than 2 GB, an uncaught exception or a sanitizer report stops that target: its input is written
 # to build-fuzz/findings/<target>/ and the script exits non-zero after the others ran. Keep a
 # finding as a regression: copy it to fuzz/regressions/<target>/ (ctest replays it).
 # --build-only stops after the build (scripts/test.sh builds the fuzzers at nice 19 while ctest

@@ -43,22 +43,23 @@ trap 'kill -INT $server 2>/dev/null || true' EXIT
   > "$out/phantom.out" 2>&1 &
 phantom=$!
 start=$(date +%s.%N)
+elapsed() { awk -v s="$start" -v n="$(date +%s.%N)" 'BEGIN { printf "%.1f", n - s }'; }
+rss_kb() { awk '/^VmRSS/ { print $2 }' "/proc/$server/status"; }
 echo "t_s,rss_kb" > "$out/rss.csv"
 # A sample every 10 s, polled each second so the run ends with the client (the 10 s sleep alone
 # kept a 30 s smoke waiting up to 10 s more).
 next=0
 while kill -0 "$phantom" 2>/dev/null; do
-  t=$(awk -v s="$start" -v n="$(date +%s.%N)" 'BEGIN { printf "%.1f", n - s }')
+  t=$(elapsed)
   if awk -v t="$t" -v n="$next" 'BEGIN { exit !(t >= n) }'; then
-    rss=$(awk '/^VmRSS/ { print $2 }' "/proc/$server/status")
-    echo "$t,$rss" >> "$out/rss.csv"
+    echo "$t,$(rss_kb)" >> "$out/rss.csv"
     next=$((next + 10))
   fi
   sleep 1 & wait $! || true
 done
 wait "$phantom"
 # And one at the end, before the server stops.
-echo "$(awk -v s="$start" -v n="$(date +%s.%N)" 'BEGIN { printf "%.1f", n - s }'),$(awk '/^VmRSS/ { print $2 }' "/proc/$server/status")" >> "$out/rss.csv"
+echo "$(elapsed),$(rss_kb)" >> "$out/rss.csv"
 kill -INT "$server"
 wait "$server"
 trap - EXIT
