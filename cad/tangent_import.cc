@@ -18,7 +18,7 @@ namespace {
 
 // A scene (docs/server.md) holding the part: its bodies free, its faces on them, the grasp on
 // the first body. Contacts between parts are for the scene's author to declare.
-nlohmann::json SceneOf(const tangent::cad::ImportedPart& part) {
+nlohmann::json SceneOf(const tangent::cad::ImportedPart& part, int64_t device_id) {
   nlohmann::json scene;
   scene["name"] = std::filesystem::path(part.path).stem().string();
   scene["comment"] = "imported from " + part.path + " by tangent-import";
@@ -45,6 +45,8 @@ nlohmann::json SceneOf(const tangent::cad::ImportedPart& part) {
   scene["bodies"] = bodies;
   scene["surfaces"] = surfaces;
   scene["grasp"] = {{"body", part.bodies.front().name}};
+  // The device tangentd serves is named, never guessed (docs/server.md "Device sessions").
+  scene["device"] = {{"id", device_id}};
   return scene;
 }
 
@@ -55,11 +57,15 @@ int main(int argc, char** argv) {
   std::string input, output;
   double band = 1e-4;
   bool quiet = false;
+  int64_t device_id = 1;
   app.add_option("part", input, "the STEP (.step, .stp) or IGES (.igs, .iges) file")->required();
   app.add_option("-o,--output", output, "the scene file to write (default: PART.json beside it)");
   app.add_option("--trim-band", band, "certified band of the trimming loops, relative")
       ->check(CLI::Range(1e-8, 1e-2));
   app.add_flag("-q,--quiet", quiet, "print only warnings and errors");
+  app.add_option("--device-id", device_id,
+                 "the device the scene names for tangentd to serve (device.id; tangent-phantom's "
+                 "default is 1)");
   CLI11_PARSE(app, argc, argv);
   if (output.empty()) output = std::filesystem::path(input).replace_extension(".json").string();
   try {
@@ -74,7 +80,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "tangent-import: cannot write %s\n", output.c_str());
       return 1;
     }
-    out << SceneOf(part).dump(1) << "\n";
+    out << SceneOf(part, device_id).dump(1) << "\n";
     if (!quiet) std::printf("written to %s\n", output.c_str());
   } catch (const tangent::cad::ImportError& e) {
     std::fprintf(stderr, "tangent-import: %s\n", e.what());

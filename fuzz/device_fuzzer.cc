@@ -202,6 +202,11 @@ bool StructuredState(uint8_t op, Reader* in, Rig* rig) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   DeviceFilterOptions o;
+  // The first device to earn a session (ids 0..3 come from the input), after 3 steady states
+  // rather than 20: short inputs then reach takeovers, returns and stale sessions. (The rule's
+  // own count and timing are DeviceFilterTest's.)
+  o.any_device = true;
+  o.takeover_states = 3;
   const Scene& scene = TheScene();
   for (int i = 0; i < 3; ++i) {
     o.workspace_min[i] = scene.device.workspace_min[i];

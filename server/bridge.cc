@@ -36,9 +36,12 @@ std::unique_ptr<lcm::LCM> OpenLcm(const std::string& url) {
 
 namespace {
 
-DeviceFilterOptions FilterOptions(const DeviceSpec& device, const BridgeOptions& options) {
+DeviceFilterOptions FilterOptions(const DeviceSpec& device, const BridgeOptions& options,
+                                  double device_timeout) {
   DeviceFilterOptions fo;
-  fo.device_id = options.device_id;
+  fo.device_id = options.device_id ? options.device_id : device.id;
+  fo.any_device = options.any_device && !fo.device_id;
+  fo.owner_timeout = device_timeout;
   for (int i = 0; i < 3; ++i) {
     fo.workspace_min[i] = device.workspace_min[i];
     fo.workspace_max[i] = device.workspace_max[i];
@@ -70,6 +73,8 @@ void FillLoopStats(const LoopCounters& c, const DeviceFilterCounts& f, const Bri
   stats->rejected_session = f.session;
   stats->rejected_sequence = f.sequence;
   stats->rejected_jump = f.jump;
+  stats->rejected_pending = f.pending;
+  stats->sequence_resets = f.seq_resets;
   stats->device_timeouts = c.device_timeouts;
   stats->faults = c.faults;
   stats->wrenches_sent = b.wrenches_sent;
@@ -94,7 +99,8 @@ class Bridge::Impl {
         status_(status_line),
         lcm_(OpenLcm(url)),
         view_lcm_(options.view_url.empty() ? nullptr : OpenLcm(options.view_url)),
-        filter_(FilterOptions(engine->servo().scene().device, options)),
+        filter_(FilterOptions(engine->servo().scene().device, options,
+                              engine->options().servo.device_timeout)),
         summary_(summary),
         window_prev_(DurationHistogram::kBins + 1, 0),
         window_now_(DurationHistogram::kBins + 1, 0),
@@ -145,6 +151,17 @@ class Bridge::Impl {
   }
 
   std::string Report() const;
+
+  std::string Serving() const {
+    const DeviceFilterOptions& o = filter_.options();
+    if (o.device_id) return "serving device " + std::to_string(*o.device_id);
+    if (o.any_device) {
+      return "serving the first device that earns a session (--device-id any), and only it";
+    }
+    return "NO DEVICE DECLARED: every device state is rejected (rejected_device). Name the "
+           "device served in the scene (\"device\": {\"id\": N}) or with --device-id N, or "
+           "choose --device-id any to serve the first device that earns a session";
+  }
 
  private:
   static constexpr int64_t kScenePeriodNs = 33'000'000;  ///< scene and contacts at ~30 Hz
@@ -343,6 +360,8 @@ int64_t Bridge::Unanswered(const LoopCounters& c) const { return impl_->Unanswer
 
 std::string Bridge::Report() const { return impl_->Report(); }
 
+std::string Bridge::Serving() const { return impl_->Serving(); }
+
 std::string Bridge::Impl::Report() const {
   LoopCounters c;
   engine_->counters().Read(&c);
@@ -368,7 +387,8 @@ std::string Bridge::Impl::Report() const {
     << "\nrejected_non_finite=" << f.non_finite << "\nrejected_quaternion=" << f.quaternion
     << "\nrejected_workspace=" << f.workspace << "\nrejected_device=" << f.device
     << "\nrejected_session=" << f.session << "\nrejected_sequence=" << f.sequence
-    << "\nrejected_jump=" << f.jump << "\ndevice_timeouts=" << c.device_timeouts
+    << "\nrejected_jump=" << f.jump << "\nrejected_pending=" << f.pending
+    << "\nsequence_resets=" << f.seq_resets << "\ndevice_timeouts=" << c.device_timeouts
     << "\nfaults=" << c.faults << "\nwrenches_sent=" << b.wrenches_sent
     << "\ntimeout_wrenches=" << c.timeout_wrenches << "\nwrenches_dropped=" << c.wrenches_dropped
     << "\nglobal_passes=" << engine_->global_passes()

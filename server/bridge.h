@@ -56,8 +56,11 @@ struct BridgeSummary {
 };
 
 struct BridgeOptions {
-  /// The device served (nullopt: the first whose state is accepted; docs/server.md).
+  /// The device served, overriding the scene's device.id (docs/server.md "Device sessions").
   std::optional<int64_t> device_id;
+  /// With no device declared (here or in the scene): serve the first device that earns a
+  /// session (tangentd --device-id any). Without it, such a server serves nothing.
+  bool any_device = false;
   double stats_rate_hz = 1.0;  ///< loop_stats_t messages per second
   /// Viewers' LCM URL (empty: none): the scene, contacts and statistics, and at the scene's
   /// rate (about 30 Hz) the last wrench sent and the last device state accepted, on the same
@@ -77,6 +80,8 @@ class Bridge {
   std::string Report() const;
   /// Accepted device states never answered (final: call after the engine stopped).
   int64_t Unanswered(const LoopCounters& c) const;
+  /// Which device is served, in a sentence for the start-up log (and what to do when none is).
+  std::string Serving() const;
 
  private:
   class Impl;

@@ -485,6 +485,14 @@ void ParseDevice(const Node& root, double unit, Scene* out) {
     const Node d = root.At("device");
     DeviceSpec& dv = s.device;
     dv.scale = d.Positive("scale", 1.0);
+    if (d.Has("id")) {
+      const Node id = d.At("id");
+      if (!id.j.is_number_integer() ||
+          (id.j.is_number_unsigned() && id.j.get<uint64_t>() > uint64_t{INT64_MAX})) {
+        id.Fail("must be a 64-bit integer: the device_state_t.device_id the server serves");
+      }
+      dv.id = id.j.get<int64_t>();
+    }
     if (d.Has("origin")) {
       dv.origin = unit * d.At("origin").Vector<3>();
       dv.origin_given = true;

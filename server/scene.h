@@ -96,6 +96,9 @@ struct DeviceSpec {
   double damping = 1.0;                                   ///< N·s/m at the hand
   double max_force = 3.3;                                 ///< N (a Touch-class device's saturation)
   double rated_stiffness = 500.0;                         ///< the device's own limit, N/m
+  /// The device served (device_state_t.device_id): the scene's "id", or tangentd --device-id.
+  /// With neither, tangentd serves no device (docs/server.md "Device sessions").
+  std::optional<int64_t> id;
   double device_rate = 1000.0;    ///< Hz, the rate the device renders our force at
   double max_force_rate = 500.0;  ///< N/s
   double ramp_time = 1.0;         ///< s, force ramp at start-up and after a timeout

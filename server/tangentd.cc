@@ -3,9 +3,13 @@
 // log, then (with --status) a one-line status per second, and a key=value summary at exit.
 
 #include <atomic>
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
+#include <optional>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -19,6 +23,15 @@ void OnSignal(int) { g_stop.store(true); }
 /// --fault-injection: SIGUSR1 stalls the global stage once (scripts/faults.sh). Set before the
 /// handler is installed and cleared after it is removed; the handler only stores an atomic.
 std::atomic<tangent::server::Engine*> g_engine{nullptr};
+/// A --device-id value that is a whole 64-bit integer, else nullopt.
+std::optional<int64_t> ParseDeviceId(const std::string& v) {
+  if (v.empty()) return std::nullopt;
+  errno = 0;
+  char* end = nullptr;
+  const long long id = std::strtoll(v.c_str(), &end, 10);
+  if (errno != 0 || *end != '\0') return std::nullopt;
+  return static_cast<int64_t>(id);
+}
 void OnStallSignal(int) {
   if (tangent::server::Engine* e = g_engine.load()) e->InjectGlobalStall();
 }
@@ -33,7 +46,7 @@ int main(int argc, char** argv) {
   double duration = 0.0;
   bool status = false;
   BridgeOptions bo;
-  int64_t device_id = 0;
+  std::string device_id;
   app.add_option("--scene", scene_path, "scene file (JSON)")->required()->check(CLI::ExistingFile);
   app.add_option("--rate", eo.rate_hz, "servo loop rate, Hz")->check(CLI::Range(100.0, 50000.0));
   app.add_option("--spin-us", eo.spin_us, "spin this long before each deadline, us")
@@ -57,9 +70,16 @@ int main(int argc, char** argv) {
   app.add_option("--contacts-channel", ch.contacts, "channel of contact_states_t");
   app.add_option("--stats-channel", ch.stats, "channel of loop_stats_t");
   app.add_option("--scene-channel", ch.scene, "channel of scene_state_t");
-  auto* device_id_option =
-      app.add_option("--device-id", device_id,
-                     "the device served (default: the first device whose state is accepted)");
+  app.add_option("--device-id", device_id,
+                 "the device served (device_state_t.device_id; default: the scene's device.id), "
+                 "or \"any\": the first device that earns a session")
+      ->check([](const std::string& v) -> std::string {
+        return ParseDeviceId(v) || v == "any"
+                   ? ""
+                   : "must be an integer (a device_state_t.device_id) or \"any\", "
+                     "got \"" +
+                         v + "\"";
+      });
   app.add_option("--stats-rate", bo.stats_rate_hz, "loop_stats_t messages per second")
       ->check(CLI::Range(0.1, 100.0));
   app.add_option("--log", log_path, "log file (load log and one status line per second)");
@@ -70,7 +90,8 @@ int main(int argc, char** argv) {
                "testing only: SIGUSR1 stalls the global contact stage once for 100 ms");
   CLI11_PARSE(app, argc, argv);
 
-  if (*device_id_option) bo.device_id = device_id;
+  bo.device_id = ParseDeviceId(device_id);
+  bo.any_device = device_id == "any";
   std::FILE* log = nullptr;
   if (!log_path.empty()) {
     log = std::fopen(log_path.c_str(), "w");
@@ -95,6 +116,9 @@ int main(int argc, char** argv) {
         scene->name.c_str(), scene->mechanism.num_bodies(), scene->surfaces.size(),
         scene->pairs.size(), scene->body_pairs.size(), engine.servo().active_contacts(), eo.rate_hz,
         eo.servo.dof, url.c_str(), bo.view_url.empty() ? "(none)" : bo.view_url.c_str());
+    const std::string serving = bridge.Serving();
+    std::printf("tangentd: %s\n", serving.c_str());
+    if (log) std::fprintf(log, "%s\n", serving.c_str());
     std::fflush(stdout);
     engine.Start();
     if (fault_injection) {

@@ -28,7 +28,7 @@ check_accounting() {
   accepted=$(_accounting_value "$server_out" device_messages)
   lost=$(_accounting_value "$server_out" lost_before_filter)
   unanswered=$(_accounting_value "$server_out" unanswered)
-  for reason in non_finite quaternion workspace device session sequence jump; do
+  for reason in non_finite quaternion workspace device session sequence jump pending; do
     rejected=$((rejected + $(_accounting_value "$server_out" "rejected_$reason")))
   done
   local served=$((accepted - unanswered))

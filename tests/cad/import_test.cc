@@ -378,7 +378,8 @@ TEST(ImportTest, TangentImportWritesASceneThatLoadsWithItsTrims) {
   const std::string command = std::string(TANGENT_IMPORT) + " " + part + " -o " + scene + " -q";
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
   const auto s = server::LoadScene(scene);
-  ASSERT_EQ(s->surfaces.size(), 26u);  // 6 planes, 12 cylinders, 8 spheres
+  ASSERT_EQ(s->surfaces.size(), 26u);                  // 6 planes, 12 cylinders, 8 spheres
+  EXPECT_EQ(s->device.id, std::optional<int64_t>(1));  // named for tangentd (--device-id)
   // In metres from a fresh process too (whose translators nothing had initialized: it once
   // wrote the box's millimetres as metres): the 40 x 30 x 20 mm box spans 0.04 m.
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = -lo;

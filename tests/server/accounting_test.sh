@@ -11,7 +11,7 @@ failures=0
 # summaries ACCEPTED REJECTED_JUMP LOST UNANSWERED SENT ANSWERED: tangentd's and one client's.
 summaries() {
   printf 'device_messages=%s\nlost_before_filter=%s\nunanswered=%s\n' "$1" "$3" "$4" > "$work/server.out"
-  for r in non_finite quaternion workspace device session sequence; do echo "rejected_$r=0"; done >> "$work/server.out"
+  for r in non_finite quaternion workspace device session sequence pending; do echo "rejected_$r=0"; done >> "$work/server.out"
   echo "rejected_jump=$2" >> "$work/server.out"
   printf 'sent=%s\nanswered=%s\n' "$5" "$6" > "$work/client.out"
 }

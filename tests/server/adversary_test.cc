@@ -36,6 +36,7 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -84,6 +85,7 @@ struct Received {
 /// The scene's device limits and the pull the scene resists (so the force is not zero).
 struct SceneFacts {
   double max_force = 3.3, max_force_rate = 500.0;
+  bool declares_device = false;  ///< the scene names its device (else --device-id 1 is passed)
   Eigen::Vector3d pull = Eigen::Vector3d::Zero();
   Eigen::Vector3d jump = Eigen::Vector3d::Zero();  ///< a sustained jump the scene resists
 };
@@ -95,6 +97,11 @@ SceneFacts ReadScene(const std::string& path) {
   if (j.contains("device")) {
     s.max_force = j["device"].value("max_force", s.max_force);
     s.max_force_rate = j["device"].value("max_force_rate", s.max_force_rate);
+    s.declares_device = j["device"].contains("id");
+    if (s.declares_device && j["device"]["id"] != kDevice) {
+      ADD_FAILURE() << path << " serves device " << j["device"]["id"] << ", this client is "
+                    << kDevice;
+    }
   }
   // A pull each example scene resists (tests/server/servo_safety_test.cc measured them), and a
   // 6 cm jump further that way, inside the workspace (docs/server.md: a sideways pull of the
@@ -120,8 +127,14 @@ class Harness {
       dup2(fd, 1);
       dup2(fd, 2);
       const std::string log = dir_ + "/tangentd.log";
-      execl(g_tangentd.c_str(), g_tangentd.c_str(), "--scene", g_scene.c_str(), "--stats-rate",
-            "20", "--log", log.c_str(), static_cast<char*>(nullptr));
+      const std::string id = std::to_string(kDevice);
+      if (facts_.declares_device) {
+        execl(g_tangentd.c_str(), g_tangentd.c_str(), "--scene", g_scene.c_str(), "--stats-rate",
+              "20", "--log", log.c_str(), static_cast<char*>(nullptr));
+      } else {
+        execl(g_tangentd.c_str(), g_tangentd.c_str(), "--scene", g_scene.c_str(), "--stats-rate",
+              "20", "--log", log.c_str(), "--device-id", id.c_str(), static_cast<char*>(nullptr));
+      }
       _exit(127);
     }
     ASSERT_GT(pid_, 0);
@@ -232,6 +245,23 @@ class Harness {
     std::lock_guard<std::mutex> l(mutex_);
     return {wrenches_.begin() + static_cast<std::ptrdiff_t>(from), wrenches_.end()};
   }
+  /// Whether a wrench answering a state of `of_session` (not a timeout wrench) has arrived since
+  /// wrench `from`.
+  bool Answered(int64_t of_session, size_t from) {
+    std::lock_guard<std::mutex> l(mutex_);
+    for (size_t i = from; i < wrenches_.size(); ++i) {
+      if (wrenches_[i].w.session == of_session && wrenches_[i].w.state != 2) return true;
+    }
+    return false;
+  }
+  /// The first answer (not a timeout wrench) to `of_session` that arrived after t_ns, or null.
+  std::optional<Received> FirstAnswerAfter(int64_t of_session, int64_t t_ns) {
+    std::lock_guard<std::mutex> l(mutex_);
+    for (const Received& r : wrenches_) {
+      if (r.at_ns > t_ns && r.w.session == of_session && r.w.state != 2) return r;
+    }
+    return std::nullopt;
+  }
   /// A statistics message that reflects everything sent before now: received more than 150 ms
   /// after now (the servo publishes its counters every 256 ticks, 64 ms at 4 kHz).
   /// The served client keeps sending meanwhile (a pause would be a device timeout).
@@ -310,6 +340,8 @@ class Harness {
   const SceneFacts& facts() const { return facts_; }
   void set_utime_offset(int64_t us) { utime_offset_ = us; }
   int64_t sent(int64_t of_session) { return seq_[of_session]; }
+  /// Makes the next state of `of_session` skip `n` sequence numbers (never sent).
+  void SkipSeq(int64_t of_session, int64_t n) { seq_[of_session] += n; }
   int64_t total_wrenches() const { return total_wrenches_; }
   int64_t total_bad() const { return total_non_finite_ + total_over_; }
 
@@ -381,7 +413,7 @@ class ServerEnvironment : public ::testing::Environment {
 /// The counters an attack may move, from two statistics messages.
 struct Delta {
   int64_t accepted, sessions, undecodable, wrong_type, lost, non_finite, quaternion, workspace,
-      device, session, sequence, jump, timeouts, faults, unanswered, wrenches;
+      device, session, sequence, jump, pending, resets, timeouts, faults, unanswered, wrenches;
   /// Device states published (every session) between the two snapshots' arrivals.
   int64_t published = 0;
   double client_pause_ms = 0.0;  ///< the client's longest pause between sends (Harness)
@@ -399,6 +431,8 @@ struct Delta {
             b.rejected_session - a.rejected_session,
             b.rejected_sequence - a.rejected_sequence,
             b.rejected_jump - a.rejected_jump,
+            b.rejected_pending - a.rejected_pending,
+            b.sequence_resets - a.sequence_resets,
             b.device_timeouts - a.device_timeouts,
             b.faults - a.faults,
             b.unanswered - a.unanswered,
@@ -408,11 +442,11 @@ struct Delta {
     std::printf(
         "[%s] counters moved: accepted %lld, sessions %lld, undecodable %lld (wrong type "
         "%lld), lost %lld, non-finite %lld, quaternion %lld, workspace %lld, device %lld, "
-        "stale session %lld, sequence %lld, jump %lld, timeouts %lld, faults %lld, "
-        "unanswered %lld, wrenches %lld\n",
+        "stale session %lld, sequence %lld, jump %lld, pending %lld, seq resets %lld, "
+        "timeouts %lld, faults %lld, unanswered %lld, wrenches %lld\n",
         what, L(accepted), L(sessions), L(undecodable), L(wrong_type), L(lost), L(non_finite),
-        L(quaternion), L(workspace), L(device), L(session), L(sequence), L(jump), L(timeouts),
-        L(faults), L(unanswered), L(wrenches));
+        L(quaternion), L(workspace), L(device), L(session), L(sequence), L(jump), L(pending),
+        L(resets), L(timeouts), L(faults), L(unanswered), L(wrenches));
   }
   static long long L(int64_t x) { return static_cast<long long>(x); }
 };
@@ -463,6 +497,8 @@ void ExpectOnly(const Delta& d, int64_t non_finite, int64_t quaternion, int64_t 
   EXPECT_EQ(d.device, 0);
   EXPECT_EQ(d.session, 0);
   EXPECT_EQ(d.sessions, 0);
+  EXPECT_EQ(d.pending, 0);
+  EXPECT_EQ(d.resets, 0);
   if (!may_lose) {
     EXPECT_EQ(d.lost, 0);
   }
@@ -493,7 +529,60 @@ Delta Corrupted(const char* what, int every,
   });
 }
 
-TEST(Adversary, A00_BaselineClientIsServed) {
+// Issue 39: without a declared device the first device id heard owned the server, and the real
+// device got 0 of 3001 answers. The server serves the device its scene names (or --device-id);
+// a stray device speaking first, and on throughout, claims nothing. (First: the server has
+// heard no one yet.)
+TEST(Adversary, A00a_AStrayDeviceSpeakingFirstClaimsNothing) {
+  Harness& h = *g_h;
+  const int64_t stray_session = 0x5e55'0bad;
+  int64_t stray = 0, real = 0;
+  const size_t from = h.WrenchCount();
+  h.Drive(0.5, 1000.0, [&](int64_t) {  // the stray alone
+    h.Publish(h.State(stray_session, h.facts().pull, /*device=*/2));
+    ++stray;
+  });
+  h.Drive(3.0, 1000.0, [&](int64_t) {  // the real device, the stray still talking
+    h.Publish(h.State(h.session, h.facts().pull));
+    ++real;
+    h.Publish(h.State(stray_session, h.facts().pull, 2));
+    ++stray;
+  });
+  const tangent::loop_stats_t s = h.FreshStats();  // (more of the real device's states)
+  h.CheckWrenches(from, "stray device first");
+  const int64_t real_sent = h.sent(h.session);
+  int64_t answered = 0, to_stray = 0;
+  for (const Received& r : h.WrenchesSince(from)) {
+    answered += r.w.session == h.session && r.w.state != 2;
+    to_stray += r.w.device_id == 2;
+  }
+  std::printf(
+      "[stray device first] stray: %lld states, rejected_device %lld; real device: %lld states, "
+      "accepted %lld (%.2f %%), earning %lld, answers %lld (%.2f %%, reported), sessions %lld\n",
+      static_cast<long long>(stray), static_cast<long long>(s.rejected_device),
+      static_cast<long long>(real_sent), static_cast<long long>(s.device_messages),
+      100.0 * static_cast<double>(s.device_messages) / static_cast<double>(real_sent),
+      static_cast<long long>(s.rejected_pending), static_cast<long long>(answered),
+      100.0 * static_cast<double>(answered) / static_cast<double>(real_sent),
+      static_cast<long long>(s.sessions));
+  // The stray never claims the server and is never answered; every state of the real device
+  // that reached the server was accepted but those that earned the device (19; more when a
+  // pause broke the streak). What fraction of the real device's states was served depends on
+  // how many reached the server, which a loaded machine decides (UDP drops): reported above,
+  // 99.4 % on a quiet machine (docs/server.md); the rule itself is DeviceFilterTest's.
+  EXPECT_GE(s.rejected_device, 1);
+  EXPECT_LE(s.rejected_device, stray);
+  EXPECT_EQ(to_stray, 0);
+  EXPECT_EQ(s.sessions, 1);
+  EXPECT_GE(s.rejected_pending, 19);
+  EXPECT_EQ(s.rejected_non_finite + s.rejected_quaternion + s.rejected_workspace +
+                s.rejected_session + s.rejected_sequence + s.rejected_jump,
+            0);
+  EXPECT_LE(s.device_messages + s.rejected_pending, real_sent);
+  EXPECT_GE(answered, 1);
+}
+
+TEST(Adversary, A00b_BaselineClientIsServed) {
   Harness& h = *g_h;
   const size_t from = h.WrenchCount();
   h.ResetGap();
@@ -601,8 +690,13 @@ TEST(Adversary, A04_RepeatedAndStaleSequenceNumbers) {
         ++injected;
       }
     });
+    // A jump of 1e6 in seq (issue 39: it counted 1,002,001 states lost): a reset.
+    h.SkipSeq(h.session, 1'000'000);
   });
-  ExpectOnly(d, 0, 0, 0, injected, 0);
+  Delta e = d;
+  e.resets = 0;
+  ExpectOnly(e, 0, 0, 0, injected, 0);
+  EXPECT_EQ(d.resets, 1);
 }
 
 TEST(Adversary, A05_HugeAndFarPositions) {
@@ -630,9 +724,13 @@ TEST(Adversary, A06_ASessionOpeningFarAwayIsRejectedThenServed) {
     h.Drive(0.2, 1000.0, [&](int64_t) { h.Publish(h.State(old_session, h.facts().pull)); });
     takeover_index = h.WrenchCount();
     h.session = fresh;
+    bool answered = false;
     h.Drive(1.5, 1000.0, [&](int64_t k) {
       h.Publish(h.State(fresh, h.facts().pull));
-      if (k % 50 == 0) {  // the old client, still talking: stale
+      // The old client, still talking once the new one is served: stale. (Before that it is
+      // still the owner: the new session earns the device in 20 steady states.)
+      answered = answered || h.Answered(fresh, takeover_index);
+      if (answered && k % 50 == 0) {
         h.Publish(h.State(old_session, h.facts().pull));
         ++stale;
       }
@@ -641,6 +739,8 @@ TEST(Adversary, A06_ASessionOpeningFarAwayIsRejectedThenServed) {
   EXPECT_EQ(d.workspace, 1);
   EXPECT_EQ(d.sessions, 1);
   EXPECT_EQ(d.session, stale);
+  EXPECT_GE(stale, 1);
+  EXPECT_GE(d.pending, 19);  // (more when a pause of the client broke the streak)
   EXPECT_EQ(d.lost, 0);
   // The new session's first answer starts from zero force and ramps.
   const std::vector<Received> w = h.WrenchesSince(takeover_index);
@@ -652,9 +752,9 @@ TEST(Adversary, A06_ASessionOpeningFarAwayIsRejectedThenServed) {
     }
   }
   ASSERT_NE(first, nullptr);
-  // Seq 1 was the far one, never answered; the first answer is to seq 2, or to a later one when
-  // the servo's tick found a newer state in the mailbox (the machine's timing).
-  EXPECT_GE(first->w.seq, 2);
+  // Seq 1 was the far one, 2..20 earned the device; the first answer is to seq 21, or to a later
+  // one when the servo's tick found a newer state in the mailbox (the machine's timing).
+  EXPECT_GE(first->w.seq, 21);
   EXPECT_EQ(first->w.state, 1);
   EXPECT_EQ(Eigen::Vector3d(first->w.force[0], first->w.force[1], first->w.force[2]).norm(), 0.0);
   int after_takeover_old = 0;
@@ -766,23 +866,29 @@ TEST(Adversary, A11_ClientRestartIsServedWithinOneRamp) {
   Harness& h = *g_h;
   const int64_t old_session = h.session;
   const int64_t restarted = 0x5e55'3003;
-  int64_t stale = 0;
+  int64_t stale_after = 0, old_before = 0;
   int64_t restart_ns = 0;
   size_t from = 0;
   const Delta d = Attack("client restart (seq from 1)", [&] {
     from = h.WrenchCount();
     restart_ns = NowNs();
     h.session = restarted;
+    bool answered = false;
     h.Drive(1.2, 1000.0, [&](int64_t k) {
       h.Publish(h.State(restarted, h.facts().pull));
+      answered = answered || h.Answered(restarted, from);
       if (k < 200 && k % 2 == 0) {  // the old process's last states, still in flight
         h.Publish(h.State(old_session, h.facts().pull));
-        ++stale;
+        ++(answered ? stale_after : old_before);
       }
     });
   });
   EXPECT_EQ(d.sessions, 1);
-  EXPECT_EQ(d.session, stale);
+  // The old process is served until the restarted one has earned the device (20 steady
+  // states), stale from then on: its states sent once the new one was answered are all stale.
+  EXPECT_GE(d.session, stale_after);
+  EXPECT_LE(d.session, stale_after + old_before);
+  EXPECT_GE(d.pending, 19);
   int64_t first_ns = 0;
   for (const Received& r : h.WrenchesSince(from)) {
     if (r.w.session == restarted) {
@@ -791,28 +897,36 @@ TEST(Adversary, A11_ClientRestartIsServedWithinOneRamp) {
     }
   }
   ASSERT_GT(first_ns, 0);
-  std::printf("[restart] first answer %.2f ms after the restart\n",
-              1e-6 * static_cast<double>(first_ns - restart_ns));
+  std::printf(
+      "[restart] first answer %.2f ms after the restart (20 states earn the device); the old "
+      "process: %lld states before it, %lld after\n",
+      1e-6 * static_cast<double>(first_ns - restart_ns), static_cast<long long>(old_before),
+      static_cast<long long>(stale_after));
   EXPECT_LE(first_ns - restart_ns, 1'000'000'000);  // within one ramp time
 }
 
 TEST(Adversary, A12_TwoCompetingClientsOfOneDevice) {
   Harness& h = *g_h;
   const int64_t a = h.session, b = 0x5e55'4004;
-  int64_t a_after = 0;
+  int64_t a_after = 0, a_earning = 0;
   size_t from = 0;
   const Delta d = Attack("two clients of one device, interleaved", [&] {
     h.Drive(0.2, 1000.0, [&](int64_t) { h.Publish(h.State(a, h.facts().pull)); });
     from = h.WrenchCount();
     h.session = b;
+    bool answered = false;
     h.Drive(1.0, 1000.0, [&](int64_t) {
       h.Publish(h.State(b, h.facts().pull));
+      answered = answered || h.Answered(b, from);
       h.Publish(h.State(a, h.facts().pull + Eigen::Vector3d(0, 0.005, 0)));
-      ++a_after;
+      ++(answered ? a_after : a_earning);
     });
   });
+  // The newer earns the device (20 steady states) and keeps it: the older is stale from then
+  // on, and cannot take it back while the newer is live (no chatter).
   EXPECT_EQ(d.sessions, 1);
-  EXPECT_EQ(d.session, a_after);  // the earlier client is stale from the takeover on
+  EXPECT_GE(d.session, a_after);
+  EXPECT_LE(d.session, a_after + a_earning);
   // Answers go out in the order of the ticks that computed them, and LCM on loopback keeps it:
   // once the newer session is answered, the older one never is again. (Before that, the older
   // client's states still queued at the takeover may be answered: as many as the bridge had
@@ -879,11 +993,13 @@ void Flood(double rate_hz, const char* what) {
   EXPECT_NEAR(static_cast<double>(d.accepted + d.lost), static_cast<double>(sent), 10.0);
   // (Timeout wrenches answer no state: not counted.) The bridge counts a state accepted when it
   // passes the filter, the servo answered or unanswered when a tick takes it, so the counters
-  // differ by the states in flight when the snapshot is taken: ±2 normally, more when the servo
-  // was descheduled then (CI: 12). Fewer than a device timeout's worth of the settle's 1 kHz
-  // states can be in flight without a timeout, and none may be answered twice.
+  // differ by the states in flight when each snapshot is taken: ±2 normally, more when the
+  // servo was descheduled then (CI: 12 at the second snapshot; 3 at the first on a machine
+  // running a second test suite). Both snapshots are taken while the client holds at 1 kHz
+  // (FreshStats, the settle): fewer than a device timeout's worth of those states can be in
+  // flight without a timeout, and none may be answered twice.
   const double handled = static_cast<double>(d.wrenches - d.timeout_wrenches + d.unanswered);
-  EXPECT_LE(handled, static_cast<double>(d.accepted) + 2.0);
+  EXPECT_LE(handled, static_cast<double>(d.accepted) + 2.0 + 1e3 * kDeviceTimeout);
   EXPECT_GE(handled, static_cast<double>(d.accepted) - 2.0 - 1e3 * kDeviceTimeout);
   // Still serving through the flood: states sent in its last second were answered (how many
   // is the machine's: reported, with the answers counted above).
@@ -902,7 +1018,92 @@ void Flood(double rate_hz, const char* what) {
 TEST(Adversary, A14_Flood10xTheDeviceRate) { Flood(10000.0, "flood 10 kHz"); }
 TEST(Adversary, A15_Flood100xTheDeviceRate) { Flood(100000.0, "flood 100 kHz"); }
 
-TEST(Adversary, A16_StillServingNormally) {
+// Issue 39: a client that started a new session every millisecond, each 10 cm from the hand,
+// took over 254 times in 4 s, stepped the force by 1.37 N and left the real client stale. Now
+// no session of the burst earns the device: the real client is served throughout.
+TEST(Adversary, A16_ABurstOfNewSessions) {
+  Harness& h = *g_h;
+  int64_t burst = 0, owner = 0;
+  int64_t burst_end = 0;
+  size_t from = 0;
+  // 10 cm from the hand, inside the workspace box (towards −x, −z).
+  const Eigen::Vector3d away = h.facts().pull + Eigen::Vector3d(-0.09, 0.0, -0.0436);
+  const Delta d = Attack("a new session every ms, 10 cm away", [&] {
+    from = h.WrenchCount();
+    h.Drive(g_flood_seconds, 1000.0, [&](int64_t k) {
+      h.Publish(h.State(h.session, h.facts().pull));
+      ++owner;
+      h.Publish(h.State(0x5e55'6000'0000 + k, away));
+      ++burst;
+    });
+    burst_end = NowNs();
+  });
+  const std::optional<Received> next = h.FirstAnswerAfter(h.session, burst_end);
+  ASSERT_TRUE(next.has_value());
+  int64_t owner_answers = 0;
+  for (const Received& r : h.WrenchesSince(from)) {
+    owner_answers += r.w.session == h.session && r.w.state != 2 && r.at_ns <= burst_end;
+  }
+  std::printf(
+      "[burst of sessions] %lld one-state sessions 10 cm away: jump %lld, pending %lld, "
+      "workspace %lld, sessions %lld; the owner's %lld states answered %lld times (reported), "
+      "next answer %.2f ms after the burst\n",
+      static_cast<long long>(burst), static_cast<long long>(d.jump),
+      static_cast<long long>(d.pending), static_cast<long long>(d.workspace),
+      static_cast<long long>(d.sessions), static_cast<long long>(owner),
+      static_cast<long long>(owner_answers), 1e-6 * static_cast<double>(next->at_ns - burst_end));
+  // Every state of the burst that reached the server refused (as a jump from the grasp point;
+  // as earning, or outside the workspace, on a scene whose box or timing makes it so; a loaded
+  // machine drops some on the way, and a new session has no sequence to count them by), and
+  // nothing else refused.
+  EXPECT_GE(d.jump + d.pending + d.workspace, 1);
+  EXPECT_LE(d.jump + d.pending + d.workspace, burst);
+  EXPECT_EQ(d.sessions, 0);
+  EXPECT_EQ(d.non_finite + d.quaternion + d.device + d.session + d.sequence, 0);
+  EXPECT_LE(next->at_ns - burst_end, 500'000'000);  // issue 39: served again within 0.5 s
+}
+
+// Issue 39: after a takeover by B and B's silence, the first client A was never served again
+// until it restarted. A silent owner loses the device after the timeout; A takes it back.
+TEST(Adversary, A17_ASilentOwnerLosesTheDevice) {
+  Harness& h = *g_h;
+  const int64_t a = h.session, b = 0x5e55'7007;
+  int64_t b_last_ns = 0;
+  size_t from = 0;
+  double a_pause_ms = 0.0;
+  const Delta d = Attack("the owner goes silent, the previous session takes it back", [&] {
+    from = h.WrenchCount();
+    h.session = b;
+    h.Drive(1.0, 1000.0, [&](int64_t) {  // B earns the device; A keeps sending (stale)
+      h.Publish(h.State(b, h.facts().pull));
+      h.Publish(h.State(a, h.facts().pull));
+    });
+    b_last_ns = NowNs();
+    h.session = a;  // B is silent from now on
+    h.ResetGap();
+    h.Hold(a, 0.3);
+    a_pause_ms = 1e-6 * static_cast<double>(h.max_gap_ns());
+  });
+  EXPECT_EQ(d.sessions, 2);
+  EXPECT_GE(d.session, 1);
+  const std::optional<Received> back = h.FirstAnswerAfter(a, b_last_ns);
+  ASSERT_TRUE(back.has_value());
+  const double after_ms = 1e-6 * static_cast<double>(back->at_ns - b_last_ns);
+  std::printf(
+      "[silent owner] A served again %.1f ms after B's last state (bound: timeout %.0f ms + "
+      "100 ms; A's longest pause %.1f ms)\n",
+      after_ms, 1e3 * kDeviceTimeout, a_pause_ms);
+  // The protocol's bound is the timeout, then 20 states at the device rate: 120 ms on a quiet
+  // machine (reported; asserted exactly on a simulated clock by DeviceFilterTest's
+  // ASilentOwnerLosesTheDeviceAndThePreviousSessionTakesItBack). Over real LCM the filter judges
+  // on the bridge's receipt clock, which a loaded machine delays: asserted here is that A is
+  // served again within the attack (0.3 s), with a fresh ramp.
+  EXPECT_LE(after_ms, 300.0);
+  EXPECT_EQ(back->w.state, 1);  // a fresh ramp
+  EXPECT_EQ(Eigen::Vector3d(back->w.force[0], back->w.force[1], back->w.force[2]).norm(), 0.0);
+}
+
+TEST(Adversary, A18_StillServingNormally) {
   Harness& h = *g_h;
   const size_t from = h.WrenchCount();
   const Delta d = Attack("normal use after everything", [&] { h.Hold(h.session, 1.0); });

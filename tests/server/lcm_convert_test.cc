@@ -55,7 +55,10 @@ TEST(LcmConvertTest, DeviceStateBecomesReadingAndSample) {
 }
 
 TEST(LcmConvertTest, EveryDevicePacketHasOneFateAndOnlyAcceptedOnesReachTheServo) {
-  DeviceFilter filter;
+  DeviceFilterOptions o;
+  o.device_id = 1;
+  o.takeover_states = 1;  // served from its first state (earning the device: DeviceFilterTest)
+  DeviceFilter filter(o);
   tangent::device_state_t scratch;
   DeviceSample sample;
   bool wrong_type = true;

@@ -17,6 +17,8 @@ TEST(SceneTest, ExampleScenesLoad) {
     const auto s = LoadScene(std::string(TANGENT_SCENES_DIR) + "/" + name + ".json");
     EXPECT_GE(s->mechanism.num_moving(), 1);
     EXPECT_GE(s->grasp.body, 0);
+    EXPECT_EQ(s->device.id,
+              std::optional<int64_t>(1));  // each names its device (tangentd serves it)
     for (const SceneSurface& sf : s->surfaces) {
       EXPECT_EQ(sf.watched, !sf.mesh.vertices.empty()) << sf.name;  // meshes only where needed
     }
@@ -129,6 +131,14 @@ TEST(SceneTest, BadScenesNameTheProblem) {
   EXPECT_NE(Error(Scene(kBody, grasp + R"(, "device": {"follow_speed": 0})"))
                 .find("device.follow_speed: must be positive, got 0"),
             std::string::npos);
+  // The device served (device_state_t.device_id): a whole 64-bit number.
+  for (const char* id : {"1.5", "\"1\"", "18446744073709551615"}) {
+    EXPECT_NE(Error(Scene(kBody, grasp + R"(, "device": {"id": )" + std::string(id) + "}"))
+                  .find("device.id: must be a 64-bit integer: the device_state_t.device_id the "
+                        "server serves"),
+              std::string::npos)
+        << id;
+  }
   EXPECT_NE(LoadSceneError("/nonexistent/scene.json").find("cannot open the scene file"),
             std::string::npos);
 }
