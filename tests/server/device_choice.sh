@@ -9,7 +9,8 @@
 #   device_choice.sh TANGENTD PHANTOM SCENES_DIR
 set -euo pipefail
 tangentd=$1 phantom=$2 scenes=$3
-build=$(cd "$(dirname "$tangentd")/.." && pwd)  # (start_tangentd runs $build/server/tangentd)
+# shellcheck disable=SC2034  # (used by start_tangentd: $build/server/tangentd)
+build=$(cd "$(dirname "$tangentd")/.." && pwd)
 # shellcheck source=../../scripts/lib/live_server.sh
 source "$(cd "$(dirname "$0")/../.." && pwd)/scripts/lib/live_server.sh"
 in_private_netns "$0" "$@"
