@@ -732,37 +732,4 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
   return out;
 }
 
-Eigen::Vector4d ClosestSamplePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
-                                  const nurbs::NurbsSurface& g, const BodyPose& pose_g, int n,
-                                  double* distance) {
-  auto grid = [n](const nurbs::NurbsSurface& s, const BodyPose& p) {
-    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector3d>> pts;
-    const auto& ku = s.knots_u();
-    const auto& kv = s.knots_v();
-    for (int i = 0; i <= n; ++i) {
-      for (int j = 0; j <= n; ++j) {
-        // Edges and corners included: a minimum on the boundary has its nearest sample there.
-        const double u = ku.domain_begin() + (ku.domain_end() - ku.domain_begin()) * i / n;
-        const double v = kv.domain_begin() + (kv.domain_end() - kv.domain_begin()) * j / n;
-        pts.push_back({{u, v}, p.Point(s.Evaluate(u, v, 0).S)});
-      }
-    }
-    return pts;
-  };
-  const auto a = grid(f, pose_f), b = grid(g, pose_g);
-  double best = INFINITY;
-  Eigen::Vector4d seed = Eigen::Vector4d::Zero();
-  for (const auto& x : a) {
-    for (const auto& y : b) {
-      const double d = (x.second - y.second).squaredNorm();
-      if (d < best) {
-        best = d;
-        seed << x.first, y.first;
-      }
-    }
-  }
-  if (distance) *distance = std::sqrt(best);
-  return seed;
-}
-
 }  // namespace tangent::contact

@@ -93,9 +93,12 @@ struct SurfaceSurfaceExtremum {
   double rcond = 0.0;  ///< of the final Newton matrix
 };
 
-/// A seed (u, v, s, t) for SolveSurfaceSurface: the closest pair among (n+1) x (n+1) samples of
-/// each placed surface (an even parameter grid with its edges and corners, n ≥ 1); *distance
-/// gets their distance.
+/// A seed (u, v, s, t) for SolveSurfaceSurface that cannot miss a boundary minimum
+/// (contact/closest_pair.cc): the closest pair among (n+1) x (n+1) samples of each placed
+/// surface (an even parameter grid with its edges and corners, n ≥ 1), solved from there; when
+/// that solve ends apart, each domain edge is solved as a curve–surface problem and each corner
+/// as a point–surface problem from its own closest samples, and a minimum of theirs nearer than
+/// the four-parameter answer is returned instead. *distance gets the closest samples' distance.
 /// For loading and tests (it allocates and costs (n+1)^4 distance evaluations).
 Eigen::Vector4d ClosestSamplePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                                   const nurbs::NurbsSurface& g, const BodyPose& pose_g, int n,

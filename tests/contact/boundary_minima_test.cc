@@ -115,10 +115,8 @@ struct Case {
   NurbsSurface f, g;
   BodyPose pf, pg;
 };
-Case MakeCase(std::mt19937_64& rng, Layout layout) {
+Case Place(std::mt19937_64& rng, Layout layout, NurbsSurface f, NurbsSurface g) {
   std::uniform_real_distribution<double> uni(0.0, 1.0);
-  NurbsSurface f = RandomSurface(rng, 3, 3, 5, 5, true);
-  NurbsSurface g = RandomSurface(rng, 3, 3, 5, 5, true);
   const BodyPose pg =
       BodyPose::FromCoordinates(Coordinates({0, 0, 0}, Eigen::Quaterniond::Identity()));
   Eigen::Quaterniond q;
@@ -140,6 +138,32 @@ Case MakeCase(std::mt19937_64& rng, Layout layout) {
       break;
   }
   return {std::move(f), std::move(g), BodyPose::FromCoordinates(Coordinates(p, q)), pg};
+}
+Case MakeCase(std::mt19937_64& rng, Layout layout) {
+  NurbsSurface f = RandomSurface(rng, 3, 3, 5, 5, true);
+  NurbsSurface g = RandomSurface(rng, 3, 3, 5, 5, true);
+  return Place(rng, layout, std::move(f), std::move(g));
+}
+
+// A random sheet of degree p in both directions, rational or not, about 4 x 4 x 1 units
+// whatever its degree: max(5, p + 1) control points a side on random non-uniform knots, and a
+// single bilinear patch for p = 1 (several would meet at creases, where no smooth minimum is).
+NurbsSurface Sheet(std::mt19937_64& rng, int p, bool rational) {
+  const int n = p == 1 ? 2 : std::max(5, p + 1);
+  nurbs::KnotVector ku = nurbs::testing::RandomKnots(rng, p, n, true);
+  nurbs::KnotVector kv = nurbs::testing::RandomKnots(rng, p, n, true);
+  std::uniform_real_distribution<double> coord(-1.0, 1.0), weight(0.5, 2.0);
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<double> w;
+  const double step = 4.0 / (n - 1);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      pts.emplace_back(step * (i + 0.3 * coord(rng)), step * (j + 0.3 * coord(rng)),
+                       0.5 * coord(rng));
+      if (rational) w.push_back(weight(rng));
+    }
+  }
+  return NurbsSurface(std::move(ku), std::move(kv), pts, w);
 }
 
 // A solve reached the sampled global minimum: a minimum by its own test, no further than the
@@ -241,6 +265,56 @@ TEST(BoundaryMinimaTest, RandomRationalPatchesFromManySeeds) {
   }
   // The layouts must produce boundary minima of each kind the issue names.
   EXPECT_GE(by_category.size(), 3u);
+}
+
+// Issue 38: the closest sample of a grid can lie in the basin of another local minimum when the
+// global one is on an edge or a corner (a random bicubic pair ended at 1.0107 for 1.0094).
+// ClosestSamplePair solves the edges and corners as curve–surface and point–surface problems
+// of their own, so the solve from its seed reaches the sampled global minimum: on random pairs
+// of degree 1 to 7, rational and not, in the three boundary layouts. Seeds within 5 % of the
+// domain widths of the minimum (beyond the 2 % basin docs/stability.md states) may belong to
+// another local minimum: their rate is reported.
+TEST(BoundaryMinimaTest, TheClosestSampleSeedReachesTheGlobalMinimumAtEveryDegree) {
+  std::mt19937_64 rng(38);
+  int cases = 0, reached = 0, on_boundary = 0, near = 0, near_ok = 0;
+  double worst = 0.0;
+  for (int degree = 1; degree <= 7; ++degree) {
+    for (Layout layout : {Layout::kCornerFace, Layout::kEdgeFace, Layout::kEdgeEdge}) {
+      for (int k = 0; k < 3; ++k) {
+        const bool rational = (degree + k) % 2 == 0;
+        NurbsSurface f = Sheet(rng, degree, rational);
+        NurbsSurface g = Sheet(rng, degree, !rational);
+        const Case c = Place(rng, layout, std::move(f), std::move(g));
+        const Truth truth = SampledClosestPair(c.f, c.pf, c.g, c.pg);
+        const SurfaceSurfaceExtremum e =
+            SolveSurfaceSurface(c.f, c.pf, c.g, c.pg, ClosestSamplePair(c.f, c.pf, c.g, c.pg, 16));
+        ++cases;
+        const bool ok = ReachedMinimum(e, truth);
+        reached += ok;
+        on_boundary += AnyHeld(e.at_bound);
+        worst = std::max(worst, (e.p_f - e.p_g).norm() - truth.distance);
+        EXPECT_TRUE(ok) << "degree " << degree << (rational ? " rational f" : " rational g")
+                        << " layout " << static_cast<int>(layout) << " case " << k << ": "
+                        << (e.p_f - e.p_g).norm() << " vs sampled " << truth.distance << " "
+                        << ToString(e.status) << " " << ToString(e.kind);
+        Eigen::Vector4d lo, hi;
+        lo << Lo(c.f), Lo(c.g);
+        hi << Hi(c.f), Hi(c.g);
+        for (int s = 0; s < 5; ++s) {
+          const SurfaceSurfaceExtremum n =
+              SolveSurfaceSurface(c.f, c.pf, c.g, c.pg, Near(rng, e.u, lo, hi, 0.05));
+          ++near;
+          near_ok += ReachedMinimum(n, truth);
+        }
+      }
+    }
+  }
+  std::printf(
+      "closest-sample seeds, degrees 1-7: %d of %d reached the sampled global minimum (%d on "
+      "an edge or corner; worst gap %.2g m, negative: below the sampled bound); seeds within "
+      "5 %% of it: %d of %d (reported)\n",
+      reached, cases, on_boundary, worst, near_ok, near);
+  EXPECT_GE(on_boundary, cases / 2);  // the layouts make boundary minima
 }
 
 // Corner of one flat sheet against the edge of another, in closed form: f is the unit square
