@@ -11,7 +11,6 @@
 #include <Geom2dConvert.hxx>
 #include <Geom2d_BSplineCurve.hxx>
 #include <Geom2d_TrimmedCurve.hxx>
-#include <GeomAPI_ProjectPointOnSurf.hxx>
 #include <GeomConvert.hxx>
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_Surface.hxx>
@@ -64,6 +63,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cad/deviation.h"
 #include "nurbs/json_io.h"
 
 namespace tangent::cad {
@@ -374,23 +374,19 @@ ImportedFace ConvertFace(const TopoDS_Face& face, const std::string& name,
                    std::move(holes), trim_options, &trim_warnings);
   for (const std::string& w : trim_warnings) warnings->push_back(name + ": " + w);
 
-  // Deviation: against OCCT's evaluation of the converted surface, and against the original
-  // surface (the distance of our point to it).
-  const Handle(Geom_Surface) original = BRep_Tool::Surface(face);
+  // Deviation: against OCCT's evaluation of the converted surface at the same parameters, and
+  // from the face's material to the file's own surface (FaceDeviation).
   const int n = options.deviation_grid;
   for (int i = 0; i <= n; ++i) {
     for (int j = 0; j <= n; ++j) {
       const double u = u0 + (u1 - u0) * i / n, v = v0 + (v1 - v0) * j / n;
       const Eigen::Vector3d ours = out.surface.Evaluate(u, v, 0).S;
       const gp_Pnt theirs = bs->Value(out.reversed ? u0 + u1 - u : u, v);
-      const gp_Pnt p(ours[0], ours[1], ours[2]);
-      out.deviation = std::max(out.deviation, p.Distance(theirs));
-      GeomAPI_ProjectPointOnSurf projection(p, original);
-      if (projection.NbPoints() > 0) {
-        out.deviation = std::max(out.deviation, projection.LowerDistance());
-      }
+      out.deviation = std::max(out.deviation, gp_Pnt(ours[0], ours[1], ours[2]).Distance(theirs));
     }
   }
+  out.deviation =
+      std::max(out.deviation, FaceDeviation(out.surface, &*out.trim, BRep_Tool::Surface(face), n));
   return out;
 }
 

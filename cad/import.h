@@ -1,8 +1,8 @@
 #pragma once
 
 // CAD import (docs/cad.md): STEP (AP203, AP214, AP242) and IGES files read by Open CASCADE,
-// every face converted to a trimmed NURBS surface of ours. The only code outside tests and
-// benchmarks that includes Open CASCADE; the rest of Tangent builds without it.
+// every face converted to a trimmed NURBS surface of ours. With cad/deviation.h the only code
+// outside tests and benchmarks that includes Open CASCADE; the rest of Tangent builds without it.
 //
 // Each face is converted by BRepBuilderAPI_NurbsConvert (planes, cylinders, cones, spheres,
 // tori, revolutions, extrusions, offsets and B-splines alike) into a B-spline surface, made
@@ -37,8 +37,9 @@ struct ImportedFace {
   std::string kind;  ///< the face's surface before conversion: plane, cylinder, cone, ...
   nurbs::NurbsSurface surface;
   std::optional<nurbs::TrimmedDomain> trim;
-  /// The largest distance between our evaluation of the surface and Open CASCADE's of the face's
-  /// surface, over a grid of parameters (m).
+  /// The largest distance (m) between our surface and Open CASCADE's: our evaluation against
+  /// theirs of the converted surface at the same parameters (a grid), and the face's material
+  /// against the file's own surface (cad/deviation.h's FaceDeviation).
   double deviation = 0.0;
   bool reversed = false;  ///< the face was reversed in its shell (its u direction flipped here)
   std::string label;      ///< the file's name for the face (XCAF), empty when it has none
