@@ -6,6 +6,7 @@
 #include <sys/prctl.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -443,12 +444,17 @@ int main(int argc, char** argv) {
   DeviceModel device(o.dm);
   tangent::server::DriverWatchdog watchdog(1e-3 * o.watchdog_ms, o.watchdog_rate);
   const int64_t start = NowNs();
+  // The same instant on the wall clock: what scripts align their own timestamps with (the log's
+  // t counts from here, however late a loaded machine started this process).
+  const double start_unix =
+      std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
   const DriveTotals totals = DriveDevice(o, hand, &lcm, &rx, &device, &watchdog, start);
   // Let the last answers arrive.
   SleepUntil(NowNs() + 50000000LL);
   rx_stop.store(true);
   rx_thread.join();
   if (o.status) std::fprintf(stderr, "\n");
+  std::printf("start_unix=%.6f\n", start_unix);
   PrintSummary(o, hand, rx, totals, device, watchdog, start);
   return 0;
 }
