@@ -5,12 +5,8 @@
 
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepBuilderAPI_NurbsConvert.hxx>
-#include <BRepTools.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
-#include <Geom2dConvert.hxx>
-#include <Geom2d_BSplineCurve.hxx>
-#include <Geom2d_TrimmedCurve.hxx>
 #include <GeomConvert.hxx>
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_Surface.hxx>
@@ -38,7 +34,6 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
 #include <TopoDS_Face.hxx>
-#include <TopoDS_Wire.hxx>
 #include <XCAFApp_Application.hxx>
 #include <XCAFDoc_ColorTool.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
@@ -64,6 +59,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cad/deviation.h"
+#include "cad/face_loops.h"
 #include "nurbs/json_io.h"
 
 namespace tangent::cad {
@@ -136,48 +132,6 @@ nurbs::NurbsSurface ToSurface(const Handle(Geom_BSplineSurface) & s, bool flip_u
   }
   return nurbs::NurbsSurface(nurbs::KnotVector(s->UDegree(), knots_u),
                              nurbs::KnotVector(s->VDegree(), knots_v), points, weights);
-}
-
-// A pcurve over [first, last] as our 2-D curve, reversed for a reversed edge, with u mirrored
-// about the domain's middle when the face's u is flipped.
-nurbs::NurbsCurve2d ToCurve(const Handle(Geom2d_Curve) & pc, double first, double last,
-                            bool reversed, bool flip_u, double u_sum) {
-  Handle(Geom2d_BSplineCurve) b =
-      Geom2dConvert::CurveToBSplineCurve(new Geom2d_TrimmedCurve(pc, first, last));
-  if (b->IsPeriodic()) b->SetNotPeriodic();
-  if (reversed) b->Reverse();
-  TColStd_Array1OfReal k(1, b->NbPoles() + b->Degree() + 1);
-  b->KnotSequence(k);
-  std::vector<Eigen::Vector2d> points;
-  std::vector<double> weights;
-  for (int i = 1; i <= b->NbPoles(); ++i) {
-    const gp_Pnt2d p = b->Pole(i);
-    points.emplace_back(flip_u ? u_sum - p.X() : p.X(), p.Y());
-    if (b->IsRational()) weights.push_back(b->Weight(i));
-  }
-  return nurbs::NurbsCurve2d(nurbs::KnotVector(b->Degree(), Flat(k)), points, weights);
-}
-
-// Closes the small gaps OCCT leaves between consecutive pcurves (within its edge tolerances):
-// each pair of meeting end points moved to their middle. @return the largest gap.
-double CloseLoop(std::vector<nurbs::NurbsCurve2d>* curves) {
-  double largest = 0.0;
-  const size_t n = curves->size();
-  std::vector<std::vector<nurbs::NurbsCurve2d::HPoint>> cpw(n);
-  for (size_t i = 0; i < n; ++i) cpw[i] = (*curves)[i].weighted_points();
-  for (size_t i = 0; i < n; ++i) {
-    auto& a = cpw[i].back();
-    auto& b = cpw[(i + 1) % n].front();
-    const Eigen::Vector2d pa = a.head<2>() / a[2], pb = b.head<2>() / b[2];
-    largest = std::max(largest, (pa - pb).norm());
-    const Eigen::Vector2d mid = 0.5 * (pa + pb);
-    a.head<2>() = mid * a[2];
-    b.head<2>() = mid * b[2];
-  }
-  for (size_t i = 0; i < n; ++i) {
-    (*curves)[i] = nurbs::NurbsCurve2d::FromHomogeneous((*curves)[i].knots(), cpw[i]);
-  }
-  return largest;
 }
 
 // A file read into an XCAF document: the shape (its free shapes together), and the document's
@@ -310,68 +264,17 @@ ImportedFace ConvertFace(const TopoDS_Face& face, const std::string& name,
   const double u0 = out.surface.knots_u().domain_begin(), u1 = out.surface.knots_u().domain_end();
   const double v0 = out.surface.knots_v().domain_begin(), v1 = out.surface.knots_v().domain_end();
 
-  // The loops, in the converted face's parameters.
-  const TopoDS_Wire outer_wire = BRepTools::OuterWire(nf);
-  std::optional<nurbs::TrimLoop> outer;
-  std::vector<nurbs::TrimLoop> holes;
-  const double diagonal = std::hypot(u1 - u0, v1 - v0);
-  for (TopExp_Explorer w(nf, TopAbs_WIRE); w.More(); w.Next()) {
-    const TopoDS_Wire wire = TopoDS::Wire(w.Current());
-    // The wire's edges as stored, each pcurve in its edge's direction (and the other way
-    // round), chained by their end points in the face's parameters: an edge whose end meets the
-    // chain better than its start is taken reversed. (BRepTools_WireExplorer dropped an edge of
-    // an IGES cylinder's seamed wire, and that wire's circles came with their orientation flags
-    // opposite to their pcurves.) The loop's sense is TrimmedDomain's to check.
-    std::vector<std::pair<nurbs::NurbsCurve2d, nurbs::NurbsCurve2d>> edges;  // (as is, reversed)
-    for (TopExp_Explorer e(wire, TopAbs_EDGE); e.More(); e.Next()) {
-      const TopoDS_Edge edge = TopoDS::Edge(e.Current());
-      double first = 0.0, last = 0.0;
-      const Handle(Geom2d_Curve) pc = BRep_Tool::CurveOnSurface(edge, nf, first, last);
-      if (pc.IsNull()) throw std::runtime_error("an edge has no curve on the face");
-      const bool rev = edge.Orientation() == TopAbs_REVERSED;
-      edges.emplace_back(ToCurve(pc, first, last, rev, out.reversed, u0 + u1),
-                         ToCurve(pc, first, last, !rev, out.reversed, u0 + u1));
-    }
-    if (edges.empty()) continue;
-    auto start = [](const nurbs::NurbsCurve2d& c) {
-      return c.Evaluate(c.knots().domain_begin(), 0).C;
-    };
-    auto end = [](const nurbs::NurbsCurve2d& c) { return c.Evaluate(c.knots().domain_end(), 0).C; };
-    nurbs::TrimLoop loop;
-    std::vector<bool> used(edges.size(), false);
-    loop.curves.push_back(edges[0].first);
-    used[0] = true;
-    for (size_t k = 1; k < edges.size(); ++k) {
-      const Eigen::Vector2d at = end(loop.curves.back());
-      size_t best = 0;
-      bool flip = false;
-      double best_gap = std::numeric_limits<double>::infinity();
-      for (size_t i = 0; i < edges.size(); ++i) {
-        if (used[i]) continue;
-        const double forward = (start(edges[i].first) - at).norm();
-        const double backward = (start(edges[i].second) - at).norm();
-        if (forward < best_gap) best_gap = forward, best = i, flip = false;
-        if (backward < best_gap) best_gap = backward, best = i, flip = true;
-      }
-      used[best] = true;
-      loop.curves.push_back(flip ? edges[best].second : edges[best].first);
-    }
-    const double gap = CloseLoop(&loop.curves);
-    if (gap > 1e-6 * diagonal) {
-      throw std::runtime_error("a wire's pcurves leave a gap of " + std::to_string(gap) +
-                               " in the face's parameters");
-    }
-    if (wire.IsSame(outer_wire)) {
-      outer = std::move(loop);
-    } else {
-      holes.push_back(std::move(loop));
-    }
+  // The loops, in the converted face's parameters, repaired within the file's tolerances.
+  FaceLoops loops = BuildFaceLoops(nf, bs, reversed, out.surface);
+  if (loops.repairs.any()) {
+    warnings->push_back(name +
+                        ": repaired within the file's tolerance: " + loops.repairs.Describe());
   }
   nurbs::TrimOptions trim_options;
   trim_options.band = options.trim_band;
   std::vector<std::string> trim_warnings;
-  out.trim.emplace(Eigen::Vector2d(u0, v0), Eigen::Vector2d(u1, v1), std::move(outer),
-                   std::move(holes), trim_options, &trim_warnings);
+  out.trim.emplace(Eigen::Vector2d(u0, v0), Eigen::Vector2d(u1, v1), std::move(loops.outer),
+                   std::move(loops.holes), trim_options, &trim_warnings);
   for (const std::string& w : trim_warnings) warnings->push_back(name + ": " + w);
 
   // Deviation: against OCCT's evaluation of the converted surface at the same parameters, and
