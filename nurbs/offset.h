@@ -40,7 +40,8 @@ struct OffsetCertificate {
   double min_curvature_radius = 0.0;      ///< smallest principal radius of curvature sampled (m)
   bool offset_exceeds_curvature = false;  ///< r > that radius: the offset may fold over itself
   /// One-sided Hausdorff bound: the largest distance from dense samples of the true offset
-  /// surface S + r n to the mesh (CGAL AABB tree), m.
+  /// surface S + r n to the mesh, m; each sample's distance taken to the triangles of the grid
+  /// cell that holds its parameters, which is at least its distance to the mesh.
   double hausdorff = 0.0;
   int samples = 0;
   /// One line for the load log.

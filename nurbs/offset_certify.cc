@@ -1,13 +1,12 @@
 // CGAL certification of offset meshes (design.md: CGAL 5.5 for mesh certification). Kept in its
 // own translation unit: CGAL's headers are heavy and nothing else in the library needs them.
 
-#include <CGAL/AABB_face_graph_triangle_primitive.h>
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
 #include <algorithm>
+#include <array>
+#include <limits>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -29,14 +28,23 @@ using Mesh = CGAL::Surface_mesh<Point>;
 // The offset mesh as a CGAL surface mesh with coincident vertices welded (a closed surface's
 // seam and a sphere's poles repeat vertices in the parameter grid; unwelded, the faces on the
 // two sides of a seam would count as intersecting along it). Triangles that collapse are dropped.
+// Only the vertices of the mesh's triangles are taken (a mesh cut along a trim keeps the whole
+// grid's vertices).
 Mesh Welded(const OffsetMesh& m) {
+  std::vector<char> used(m.vertices.size(), 0);
+  for (const auto& t : m.base.triangles) {
+    for (int k : t) used[static_cast<size_t>(k)] = 1;
+  }
   double scale = 1.0;
-  for (const Eigen::Vector3d& v : m.vertices) scale = std::max(scale, v.cwiseAbs().maxCoeff());
+  for (size_t k = 0; k < m.vertices.size(); ++k) {
+    if (used[k]) scale = std::max(scale, m.vertices[k].cwiseAbs().maxCoeff());
+  }
   const double q = 1e-12 * scale;
   std::map<std::tuple<long long, long long, long long>, Mesh::Vertex_index> index;
   std::vector<Mesh::Vertex_index> map(m.vertices.size());
   Mesh mesh;
   for (size_t k = 0; k < m.vertices.size(); ++k) {
+    if (!used[k]) continue;
     const Eigen::Vector3d& v = m.vertices[k];
     const auto key =
         std::make_tuple(std::llround(v.x() / q), std::llround(v.y() / q), std::llround(v.z() / q));
@@ -68,10 +76,6 @@ OffsetCertificate CertifyOffsetMesh(const NurbsSurface& surface, const OffsetMes
   CGAL::Polygon_mesh_processing::self_intersections(faces(mesh), mesh, std::back_inserter(pairs));
   c.self_intersecting_pairs = static_cast<int>(pairs.size());
 
-  using Primitive = CGAL::AABB_face_graph_triangle_primitive<Mesh>;
-  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
-  Tree tree(faces(mesh).first, faces(mesh).second, mesh);
-  tree.accelerate_distance_queries();
   const double u0 = surface.knots_u().domain_begin(), u1 = surface.knots_u().domain_end();
   const double v0 = surface.knots_v().domain_begin(), v1 = surface.knots_v().domain_end();
   const int n = std::max(2, samples_per_direction);
@@ -82,28 +86,38 @@ OffsetCertificate CertifyOffsetMesh(const NurbsSurface& surface, const OffsetMes
   const std::vector<double>& ul = m.base.u_lines;
   const std::vector<double>& vl = m.base.v_lines;
   const size_t nv = vl.size() > 1 ? vl.size() - 1 : 1;
-  std::vector<char> kept;
-  if (!m.base.cells.empty()) {
-    kept.assign(nv * (ul.size() > 1 ? ul.size() - 1 : 1), 0);
-    for (int cell : m.base.cells) kept[static_cast<size_t>(cell)] = 1;
+  // The triangles of each grid cell (at most two; -1: none, the cell was cut away).
+  std::vector<std::array<int, 2>> of_cell(nv * (ul.size() > 1 ? ul.size() - 1 : 1), {-1, -1});
+  for (int t = 0; t < static_cast<int>(m.base.triangles.size()); ++t) {
+    std::array<int, 2>& slot = of_cell[static_cast<size_t>(m.base.CellOf(t))];
+    (slot[0] < 0 ? slot[0] : slot[1]) = t;
   }
-  auto in_kept_cell = [&](double u, double v) {
-    if (kept.empty()) return true;
+  auto cell_of = [&](double u, double v) -> const std::array<int, 2>& {
     const auto cu = std::upper_bound(ul.begin() + 1, ul.end() - 1, u) - ul.begin() - 1;
     const auto cv = std::upper_bound(vl.begin() + 1, vl.end() - 1, v) - vl.begin() - 1;
-    return kept[static_cast<size_t>(cu) * nv + static_cast<size_t>(cv)] != 0;
+    return of_cell[static_cast<size_t>(cu) * nv + static_cast<size_t>(cv)];
   };
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) {
       const double u = u0 + (u1 - u0) * (i + 0.5) / n, v = v0 + (v1 - v0) * (j + 0.5) / n;
-      if (!in_kept_cell(u, v)) continue;
+      const std::array<int, 2>& cell = cell_of(u, v);
+      if (cell[0] < 0) continue;
       const SurfacePoint p = surface.Evaluate(u, v, 2);
       const Eigen::Vector3d N = p.S_u.cross(p.S_v);
       if (!(N.norm() > 0.0)) continue;
       const Eigen::Vector3d nrm = N.normalized();
       const Eigen::Vector3d x = p.S + m.offset * nrm;
-      worst = std::max(
-          worst, std::sqrt(CGAL::to_double(tree.squared_distance(Point(x.x(), x.y(), x.z())))));
+      // The distance to the cell's own triangles: at least the distance to the mesh, so the
+      // largest is still an upper bound of the one-sided Hausdorff distance.
+      double d = std::numeric_limits<double>::infinity();
+      for (int t : cell) {
+        if (t < 0) continue;
+        const auto& tri = m.base.triangles[static_cast<size_t>(t)];
+        d = std::min(d, PointTriangleDistance(x, m.vertices[static_cast<size_t>(tri[0])],
+                                              m.vertices[static_cast<size_t>(tri[1])],
+                                              m.vertices[static_cast<size_t>(tri[2])]));
+      }
+      worst = std::max(worst, d);
       ++c.samples;
       // Principal curvatures: eigenvalues of I⁻¹ II (II with the outward normal): κ > 0 where
       // the surface bends towards the offset side, which folds an offset larger than 1/κ.

@@ -1,13 +1,18 @@
 #include "server/scene.h"
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <numbers>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
@@ -564,23 +569,50 @@ void ParseDevice(const Node& root, double unit, Scene* out) {
   }
 }
 
-// Offset meshes for the surfaces the global stage watches, certified (load log).
+// Offset meshes for the surfaces the global stage watches, certified (load log). The surfaces
+// are independent: one thread per core takes the next one (a 375-face part's meshes took 10 s
+// on one core); the log keeps the surfaces' order.
 void BuildOffsetMeshes(Scene* out) {
   Scene& s = *out;
-  for (SceneSurface& sf : s.surfaces) {
-    if (!sf.watched) continue;
-    sf.mesh =
-        nurbs::MakeOffsetMesh(sf.surface, s.offset_tolerance, s.offset_margin, s.offset_max_edge);
-    if (sf.trim) {
-      // Only the material is collided: cells that hold none are cut (the global stage never
-      // seeds in trimmed-away regions), cells the trim crosses kept whole.
-      const size_t before = sf.mesh.base.triangles.size();
-      sf.mesh.base = nurbs::CutAlongTrim(sf.mesh.base, *sf.trim);
-      s.load_log.push_back("offset mesh " + sf.name + ": cut along its trim, " +
-                           std::to_string(sf.mesh.base.triangles.size()) + " of " +
-                           std::to_string(before) + " triangles kept");
+  std::vector<size_t> watched;
+  for (size_t i = 0; i < s.surfaces.size(); ++i) {
+    if (s.surfaces[i].watched) watched.push_back(i);
+  }
+  std::vector<std::vector<std::string>> logs(watched.size());
+  std::atomic<size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  auto work = [&] {
+    for (size_t k = next++; k < watched.size(); k = next++) {
+      try {
+        SceneSurface& sf = s.surfaces[watched[k]];
+        sf.mesh = nurbs::MakeOffsetMesh(sf.surface, s.offset_tolerance, s.offset_margin,
+                                        s.offset_max_edge);
+        if (sf.trim) {
+          // Only the material is collided: cells that hold none are cut (the global stage never
+          // seeds in trimmed-away regions), cells the trim crosses kept whole.
+          const size_t before = sf.mesh.base.triangles.size();
+          sf.mesh.base = nurbs::CutAlongTrim(sf.mesh.base, *sf.trim);
+          logs[k].push_back("offset mesh " + sf.name + ": cut along its trim, " +
+                            std::to_string(sf.mesh.base.triangles.size()) + " of " +
+                            std::to_string(before) + " triangles kept");
+        }
+        logs[k].push_back(nurbs::CertifyOffsetMesh(sf.surface, sf.mesh, 60).Report(sf.name));
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+      }
     }
-    s.load_log.push_back(nurbs::CertifyOffsetMesh(sf.surface, sf.mesh, 60).Report(sf.name));
+  };
+  const size_t threads =
+      std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), watched.size());
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+  for (std::vector<std::string>& l : logs) {
+    for (std::string& line : l) s.load_log.push_back(std::move(line));
   }
 }
 
