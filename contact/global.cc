@@ -11,6 +11,7 @@
 #include <string>
 
 #include "contact/box_newton.h"
+#include "contact/offset_chunks.h"
 #include "contact/relative_curvature.h"
 #include "contact/trimmed.h"
 
@@ -35,15 +36,6 @@ const char* ToString(ContactEvent::Reason r) {
 }
 
 namespace {
-
-// A block of grid cells of a surface's offset mesh, with its own BVH and collision object.
-struct Chunk {
-  std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> model;
-  std::unique_ptr<fcl::CollisionObjectd> object;
-  std::vector<int> triangles;    // chunk triangle k is surface triangle triangles[k]
-  Eigen::Vector2d uv_lo, uv_hi;  // parameter box of its vertices
-  Eigen::Vector3d centre, half;  // box of its offset vertices, surface frame
-};
 
 // World box of a surface-frame box (centre c, half extents h) under pose p: exact for the box.
 struct WorldBox {
@@ -249,60 +241,6 @@ bool BroadPhaseCallback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, vo
 
 namespace {
 
-// Chunks of a surface's offset mesh: blocks of grid cells (chunk_v_cells across v, as many
-// along u as make about chunk_triangles triangles), each with the vertices it uses and its own
-// BVH. Small in both directions, so the chunks near a tracked contact fall inside its sphere of
-// neglect and are skipped.
-std::vector<Chunk> BuildChunks(const nurbs::OffsetMesh& mesh, const GlobalOptions& options) {
-  const int nt = static_cast<int>(mesh.base.triangles.size());
-  const int nvc = std::max(1, static_cast<int>(mesh.base.v_lines.size()) - 1);
-  const int bv = std::min(nvc, std::max(1, options.chunk_v_cells));
-  const int bu = std::max(1, options.chunk_u_cells);
-  std::map<std::pair<int, int>, std::vector<int>> blocks;
-  for (int t = 0; t < nt; ++t) {
-    const int cell = mesh.base.CellOf(t);
-    blocks[{(cell / nvc) / bu, (cell % nvc) / bv}].push_back(t);
-  }
-  std::vector<Chunk> chunks;
-  for (const auto& [block, triangles] : blocks) {
-    std::vector<int> local(mesh.vertices.size(), -1);
-    std::vector<fcl::Vector3d> pts;
-    std::vector<fcl::Triangle> tris;
-    Chunk c;
-    c.triangles = triangles;
-    c.uv_lo = Eigen::Vector2d::Constant(1e300);
-    c.uv_hi = Eigen::Vector2d::Constant(-1e300);
-    for (int t : triangles) {
-      size_t idx[3];
-      for (int k = 0; k < 3; ++k) {
-        const int v = mesh.base.triangles[static_cast<size_t>(t)][static_cast<size_t>(k)];
-        if (local[static_cast<size_t>(v)] < 0) {
-          local[static_cast<size_t>(v)] = static_cast<int>(pts.size());
-          pts.push_back(mesh.vertices[static_cast<size_t>(v)]);
-        }
-        idx[k] = static_cast<size_t>(local[static_cast<size_t>(v)]);
-        c.uv_lo = c.uv_lo.cwiseMin(mesh.base.uv[static_cast<size_t>(v)]);
-        c.uv_hi = c.uv_hi.cwiseMax(mesh.base.uv[static_cast<size_t>(v)]);
-      }
-      tris.emplace_back(idx[0], idx[1], idx[2]);
-    }
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-    for (const fcl::Vector3d& x : pts) {
-      lo = lo.cwiseMin(x);
-      hi = hi.cwiseMax(x);
-    }
-    c.centre = 0.5 * (lo + hi);
-    c.half = 0.5 * (hi - lo);
-    c.model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
-    c.model->beginModel();
-    c.model->addSubModel(pts, tris);
-    c.model->endModel();
-    c.object = std::make_unique<fcl::CollisionObjectd>(c.model);
-    chunks.push_back(std::move(c));
-  }
-  return chunks;
-}
-
 // A surface with an offset mesh, as the global stage watches it: its chunks, the whole mesh's
 // box as the broad phase's object (user data: the surface's index), and its metres per
 // parameter unit (mean |S_u|, |S_v| over the mesh's vertices) for distances along it.
@@ -310,7 +248,7 @@ Watched WatchSurface(int index, const GlobalSurface& s, const GlobalOptions& opt
   Watched w;
   w.s = s;
   if (s.trim) w.edges = std::make_unique<TrimEdges>(s.surface, s.trim);
-  w.chunks = BuildChunks(*s.mesh, options);
+  w.chunks = BuildChunks(*s.mesh, options.chunk_u_cells, options.chunk_v_cells);
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
   for (const Eigen::Vector3d& x : s.mesh->vertices) {
     lo = lo.cwiseMin(x);
@@ -540,14 +478,16 @@ void NarrowPhase(GlobalContactStage::Impl& m, const GlobalOptions& options, int 
       continue;
     }
     ++st->chunk_pairs_tested;
-    ca.object->setTransform(pa.R_WB, pa.q.head<3>());
-    cb.object->setTransform(pb.R_WB, pb.q.head<3>());
+    fcl::CollisionObjectd* oa = ca.Object();
+    fcl::CollisionObjectd* ob = cb.Object();
+    oa->setTransform(pa.R_WB, pa.q.head<3>());
+    ob->setTransform(pb.R_WB, pb.q.head<3>());
     fcl::CollisionRequestd request(static_cast<size_t>(options.max_triangle_pairs), false);
     fcl::CollisionResultd result;
-    fcl::collide(ca.object.get(), cb.object.get(), request, result);
+    fcl::collide(oa, ob, request, result);
     for (size_t r = 0; r < result.numContacts(); ++r) {
       const fcl::Contactd& c = result.getContact(r);
-      const bool swapped = c.o1 != ca.object->collisionGeometry().get();
+      const bool swapped = c.o1 != oa->collisionGeometry().get();
       m.triangle_pairs.emplace_back(ca.triangles[static_cast<size_t>(swapped ? c.b2 : c.b1)],
                                     cb.triangles[static_cast<size_t>(swapped ? c.b1 : c.b2)]);
     }
