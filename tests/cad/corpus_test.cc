@@ -39,6 +39,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <ostream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -52,6 +53,9 @@ namespace {
 struct Entry {
   std::string file, writer, unit;
 };
+
+// gtest prints a parameter by this (the test names in ctest show the file).
+void PrintTo(const Entry& e, std::ostream* os) { *os << e.file; }
 
 std::vector<Entry> Corpus() {
   std::ifstream in(std::string(TANGENT_CORPUS_DIR) + "/corpus.tsv");
