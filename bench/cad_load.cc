@@ -126,6 +126,17 @@ int LoadPart(std::string path) {
   for (const std::string& w : part.report.warnings) {
     if (w.find("skipped") != std::string::npos) std::printf("  %s\n", w.c_str());
   }
+  int folds = 0, reduced = 0;
+  for (const std::string& line : scene->load_log) {
+    if (line.find("WARNING") != std::string::npos && folds++ < 3) {
+      std::printf("  %s\n", line.c_str());
+    }
+    if (line.find("reduced to") != std::string::npos && reduced++ < 2) {
+      std::printf("  %s\n", line.c_str());
+    }
+  }
+  std::printf("cad_load: %d offsets reduced below a concave radius; %d still fold\n", reduced,
+              folds);
   return 0;
 }
 

@@ -358,10 +358,36 @@ GlobalContactStage::GlobalContactStage(std::vector<GlobalSurface> surfaces,
       m.watched.push_back(std::move(w));
       continue;
     }
-    if (s.mesh->offset < options.release) {
-      throw std::invalid_argument(name + "'s offset is below the release distance");
-    }
     m.watched.push_back(WatchSurface(i, s, options));
+  }
+  // A declared pair's offsets together must reach twice the release distance, so that it is
+  // seen until it is released (a face's offset may be reduced below a concave radius of its).
+  auto offset = [&](int i) { return surfaces[static_cast<size_t>(i)].mesh->offset; };
+  std::vector<double> body_min(static_cast<size_t>(m.num_bodies), 1e300);
+  for (int i = 0; i < m.n; ++i) {
+    if (surfaces[static_cast<size_t>(i)].mesh) {
+      double& b = body_min[static_cast<size_t>(surfaces[static_cast<size_t>(i)].body)];
+      b = std::min(b, offset(i));
+    }
+  }
+  for (int a = 0; a < m.num_bodies; ++a) {
+    for (int b = a + 1; b < m.num_bodies; ++b) {
+      if (m.body_declared[static_cast<size_t>(a * m.num_bodies + b)] &&
+          body_min[static_cast<size_t>(a)] + body_min[static_cast<size_t>(b)] <
+              2.0 * options.release) {
+        throw std::invalid_argument("global contact: bodies " + std::to_string(a) + " and " +
+                                    std::to_string(b) +
+                                    ": their smallest offsets together are below twice the "
+                                    "release distance");
+      }
+    }
+  }
+  for (const auto& [a, b] : m.surface_declared) {
+    if (offset(a) + offset(b) < 2.0 * options.release) {
+      throw std::invalid_argument("global contact: surfaces " + std::to_string(a) + " and " +
+                                  std::to_string(b) +
+                                  ": offsets together below twice the release distance");
+    }
   }
   for (Watched& w : m.watched) {
     if (w.object) m.manager->registerObject(w.object.get());

@@ -30,7 +30,8 @@ struct GlobalSurface {
 struct GlobalOptions {
   /// A contact is added when its extremal distance β falls below `activation` and removed when
   /// it rises above `release` (> activation: hysteresis), leaves the domain, or is lost. The
-  /// offset meshes' margin must be at least `release`.
+  /// offsets of each declared pair's two meshes must reach 2 x `release` together (a face's
+  /// offset may be below `release` where it was reduced below a concave radius of its own).
   double activation = 0.1e-3;
   double release = 0.2e-3;
   /// Spheres of neglect: a seed within ρ of an accepted seed or tracked contact of the same pair

@@ -37,8 +37,11 @@ OffsetMesh MakeOffsetMesh(const NurbsSurface& surface, double tolerance, double 
 struct OffsetCertificate {
   int triangles = 0;
   int self_intersecting_pairs = 0;  ///< pairs of triangles that intersect (CGAL, exact predicates)
-  double min_curvature_radius = 0.0;      ///< smallest principal radius of curvature sampled (m)
-  bool offset_exceeds_curvature = false;  ///< r > that radius: the offset may fold over itself
+  double min_curvature_radius = 0.0;  ///< smallest principal radius of curvature sampled (m)
+  /// Smallest radius of curvature bending towards the offset side (concave, seen from the
+  /// offset), m; infinite when none was sampled.
+  double min_concave_radius = 0.0;
+  bool offset_exceeds_curvature = false;  ///< r > min_concave_radius: the offset may fold
   /// One-sided Hausdorff bound: the largest distance from dense samples of the true offset
   /// surface S + r n to the mesh, m; each sample's distance taken to the triangles of the grid
   /// cell that holds its parameters, which is at least its distance to the mesh.

@@ -134,6 +134,7 @@ OffsetCertificate CertifyOffsetMesh(const NurbsSurface& surface, const OffsetMes
   }
   c.hausdorff = worst;
   c.min_curvature_radius = min_radius;
+  c.min_concave_radius = min_concave;
   c.offset_exceeds_curvature = m.offset > min_concave;
   return c;
 }

@@ -586,18 +586,36 @@ void BuildOffsetMeshes(Scene* out) {
     for (size_t k = next++; k < watched.size(); k = next++) {
       try {
         SceneSurface& sf = s.surfaces[watched[k]];
-        sf.mesh = nurbs::MakeOffsetMesh(sf.surface, s.offset_tolerance, s.offset_margin,
-                                        s.offset_max_edge);
-        if (sf.trim) {
-          // Only the material is collided: cells that hold none are cut (the global stage never
-          // seeds in trimmed-away regions), cells the trim crosses kept whole.
-          const size_t before = sf.mesh.base.triangles.size();
-          sf.mesh.base = nurbs::CutAlongTrim(sf.mesh.base, *sf.trim);
-          logs[k].push_back("offset mesh " + sf.name + ": cut along its trim, " +
-                            std::to_string(sf.mesh.base.triangles.size()) + " of " +
-                            std::to_string(before) + " triangles kept");
+        auto build = [&](double tolerance, double margin) {
+          sf.mesh = nurbs::MakeOffsetMesh(sf.surface, tolerance, margin, s.offset_max_edge);
+          if (sf.trim) {
+            // Only the material is collided: cells that hold none are cut (the global stage
+            // never seeds in trimmed-away regions), cells the trim crosses kept whole.
+            const size_t before = sf.mesh.base.triangles.size();
+            sf.mesh.base = nurbs::CutAlongTrim(sf.mesh.base, *sf.trim);
+            logs[k].push_back("offset mesh " + sf.name + ": cut along its trim, " +
+                              std::to_string(sf.mesh.base.triangles.size()) + " of " +
+                              std::to_string(before) + " triangles kept");
+          }
+          return nurbs::CertifyOffsetMesh(sf.surface, sf.mesh, 60);
+        };
+        nurbs::OffsetCertificate c = build(s.offset_tolerance, s.offset_margin);
+        if (c.offset_exceeds_curvature) {
+          // An offset beyond a concave radius folds (a fillet smaller than the margin): this
+          // face's offset is reduced to 0.9 of that radius, its tessellation bound to a quarter
+          // of the offset. Its pairs are still seen if the other side's offset makes up for it
+          // (GlobalContactStage checks that each declared pair's offsets reach twice the release).
+          const double was = sf.mesh.offset, radius = c.min_concave_radius, r = 0.9 * radius;
+          const double tolerance = std::min(s.offset_tolerance, 0.25 * r);
+          c = build(tolerance, r - tolerance);
+          char text[256];
+          std::snprintf(text, sizeof text,
+                        "offset mesh %s: its offset %.3g m exceeded a concave radius of %.3g m "
+                        "(it folded); reduced to %.3g m for this face",
+                        sf.name.c_str(), was, radius, sf.mesh.offset);
+          logs[k].push_back(text);
         }
-        logs[k].push_back(nurbs::CertifyOffsetMesh(sf.surface, sf.mesh, 60).Report(sf.name));
+        logs[k].push_back(c.Report(sf.name));
       } catch (...) {
         std::lock_guard<std::mutex> lock(failure_mutex);
         if (!failure) failure = std::current_exception();

@@ -393,12 +393,21 @@ TEST(GlobalTest, BadInputIsRejectedWithAMessage) {
   } catch (const std::invalid_argument& e) {
     EXPECT_STREQ(e.what(), "global contact: pair (0, 2) does not name two of the 2 surfaces");
   }
+  // A pair's offsets together must reach twice the release distance: one offset may be below it
+  // (a face's, reduced below a concave radius of its) if the other makes up for it.
   const nurbs::OffsetMesh thin = nurbs::MakeOffsetMesh(c.wire, 50e-6, 0.05e-3);
+  const nurbs::OffsetMesh thick = nurbs::MakeOffsetMesh(c.wire, 50e-6, 0.5e-3);
+  ASSERT_LT(thin.offset, GlobalOptions{}.release);
+  ASSERT_GE(thin.offset + thick.offset, 2.0 * GlobalOptions{}.release);
+  EXPECT_NO_THROW(
+      GlobalContactStage({{0, &c.wire, &thin}, {1, &c.wire, &thick}}, {{0, 1}}, GlobalOptions{}));
   try {
-    GlobalContactStage s({{0, &c.wire, &thin}, {1, &c.wire, &c.mesh}}, {{0, 1}}, GlobalOptions{});
+    GlobalContactStage s({{0, &c.wire, &thin}, {1, &c.wire, &thin}}, {{0, 1}}, GlobalOptions{});
     ADD_FAILURE();
   } catch (const std::invalid_argument& e) {
-    EXPECT_STREQ(e.what(), "global contact: surface 0's offset is below the release distance");
+    EXPECT_STREQ(e.what(),
+                 "global contact: surfaces 0 and 1: offsets together below twice the release "
+                 "distance");
   }
 }
 
