@@ -6,21 +6,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <numbers>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
 
-#include "server/global_link.h"
-#include "server/phantom.h"
-#include "server/servo.h"
-#include "testing/alloc_counter.h"
+#include "tests/server/hand_drive.h"
 
 namespace tangent::server {
 namespace {
@@ -40,10 +34,6 @@ struct PegRun {
   double tick_seconds = 0.0, pass_seconds = 0.0;
 };
 
-double Seconds(std::chrono::steady_clock::time_point from) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count();
-}
-
 // A peg-in-hole scene and its surfaces' names.
 struct PegScene {
   const char* file;
@@ -51,12 +41,6 @@ struct PegScene {
 };
 
 PegRun RunPegInHole(const Scene& scene, const PegScene& names) {
-  std::ifstream f(std::string(TANGENT_SCENES_DIR) + "/peg_in_hole.path.csv");
-  std::stringstream text;
-  text << f.rdbuf();
-  const HandTrajectory hand = HandTrajectory::FromCsv(text.str(), "peg_in_hole.path.csv");
-  ServoLoop servo(scene, ServoOptions{});
-  GlobalLink link(servo);
   const int top = scene.SurfaceIndex(names.top), wall = scene.SurfaceIndex(names.wall);
   const int floor = scene.SurfaceIndex(names.floor);
   const int crown = scene.SurfaceIndex(names.crown);
@@ -65,38 +49,7 @@ PegRun RunPegInHole(const Scene& scene, const PegScene& names) {
   const nurbs::TrimmedDomain& trim = *scene.surfaces[static_cast<size_t>(top)].trim;
   const double end_radius = 4 * mm - 20 * mm + std::sqrt(20 * mm * 20 * mm - 16 * mm * mm);
   PegRun run;
-  Snapshot snap;
-  TickResult r;
-  int64_t now = 1'000'000'000, seq = 0;
-  Eigen::Vector3d last_force = Eigen::Vector3d::Zero();
-  // 1 kHz device states, 4 servo ticks each, a global pass every 16 ticks (4 ms: about what a
-  // pass costs on this scene).
-  for (int k = 0; k < 20000; ++k) {
-    const Eigen::Vector3d p = hand.At(1e-3 * k);
-    DeviceSample s;
-    s.seq = ++seq;
-    s.utime = now / 1000;
-    s.received_ns = now;
-    for (int i = 0; i < 3; ++i) s.position[i] = p[i];
-    s.orientation[0] = 1.0;
-    for (int tick = 0; tick < 4; ++tick) {
-      const long before = tangent::testing::AllocationCount();
-      const auto t0 = std::chrono::steady_clock::now();
-      servo.Tick(&s, now, &r);
-      run.tick_seconds += Seconds(t0);
-      run.allocations += tangent::testing::AllocationCount() - before;
-      now += 250'000;
-      ++run.ticks;
-      run.worst_violation = std::max(run.worst_violation, r.violation);
-      if (r.answered) {
-        const Eigen::Vector3d F(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
-        EXPECT_TRUE(F.allFinite());
-        run.max_force = std::max(run.max_force, F.norm());
-        run.max_force_step = std::max(run.max_force_step, (F - last_force).norm());
-        last_force = F;
-      }
-    }
-    servo.FillSnapshot(&snap);
+  auto each = [&](const Snapshot& snap) {
     bool edge = false, on_wall = false, on_floor = false, crown_on_wall = false;
     for (int c = 0; c < snap.num_contacts; ++c) {
       const TrackedContact& x = snap.contacts[c];
@@ -139,12 +92,18 @@ PegRun RunPegInHole(const Scene& scene, const PegScene& names) {
       }
     }
     run.end_height = centre.z();
-    if (k % 4 == 3) {
-      const auto t0 = std::chrono::steady_clock::now();
-      link.Pass(snap, [&](const ContactEventMsg& m) { run.events += servo.Apply(m); });
-      run.pass_seconds += Seconds(t0);
-    }
-  }
+  };
+  const HandDrive drive =
+      DriveAlongPath(scene, std::string(TANGENT_SCENES_DIR) + "/peg_in_hole.path.csv", 20000, each);
+  EXPECT_TRUE(drive.all_finite);
+  run.worst_violation = drive.worst_violation;
+  run.max_force = drive.max_force;
+  run.max_force_step = drive.max_force_step;
+  run.ticks = drive.ticks;
+  run.events = drive.events;
+  run.allocations = drive.allocations;
+  run.tick_seconds = drive.tick_seconds;
+  run.pass_seconds = drive.pass_seconds;
   return run;
 }
 
