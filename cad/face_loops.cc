@@ -174,6 +174,7 @@ class Loops {
   void Close(std::vector<NurbsCurve2d>* curves, const std::vector<double>& tolerance,
              FaceLoops::Repairs* repairs) const {
     std::vector<NurbsCurve2d> out;
+    std::vector<std::pair<size_t, NurbsCurve2d>> joins;  // pieces of their own, after curve i
     const size_t n = curves->size();
     std::vector<NurbsCurve2d> c = *curves;
     for (size_t i = 0; i < n; ++i) {
@@ -196,8 +197,8 @@ class Loops {
       if (gap > 1e-3 * diagonal_) {
         // A piece of its own: moving the ends would bend the curves.
         ++repairs->joined;
-        joins_.push_back({i, NurbsCurve2d(nurbs::KnotVector(1, {0.0, 0.0, 1.0, 1.0}),
-                                          std::vector<Eigen::Vector2d>{pa, pb}, {})});
+        joins.push_back({i, NurbsCurve2d(nurbs::KnotVector(1, {0.0, 0.0, 1.0, 1.0}),
+                                         std::vector<Eigen::Vector2d>{pa, pb}, {})});
       } else {
         const Eigen::Vector2d mid = 0.5 * (pa + pb);
         auto set_end = [](NurbsCurve2d* curve, bool last, const Eigen::Vector2d& p) {
@@ -216,11 +217,10 @@ class Loops {
     }
     for (size_t i = 0; i < n; ++i) {
       out.push_back(c[i]);
-      for (const auto& [after, piece] : joins_) {
+      for (const auto& [after, piece] : joins) {
         if (after == i) out.push_back(piece);
       }
     }
-    joins_.clear();
     *curves = std::move(out);
   }
 
@@ -230,7 +230,6 @@ class Loops {
   Eigen::Vector2d lo_, hi_;
   double diagonal_;
   bool closed_[2] = {false, false};
-  mutable std::vector<std::pair<size_t, NurbsCurve2d>> joins_;
 };
 
 // The largest tolerance of an edge and its vertices.
