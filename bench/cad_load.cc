@@ -36,6 +36,7 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -48,6 +49,25 @@ namespace {
 
 double Seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The offset meshes a scene built and their triangles.
+std::pair<int, size_t> MeshTotals(const tangent::server::Scene& scene) {
+  size_t triangles = 0;
+  int meshes = 0;
+  for (const auto& s : scene.surfaces) {
+    triangles += s.mesh.base.triangles.size();
+    meshes += !s.mesh.vertices.empty();
+  }
+  return {meshes, triangles};
+}
+
+// One global pass over the servo's current state: its seconds; events counted into *events.
+double TimedPass(tangent::server::GlobalLink& link, const tangent::server::Snapshot& snap,
+                 int* events) {
+  const auto t0 = std::chrono::steady_clock::now();
+  link.Pass(snap, [&](const tangent::server::ContactEventMsg&) { ++*events; });
+  return Seconds(t0);
 }
 
 // Peak resident memory (MB) of this process and of its largest waited-for child.
@@ -99,22 +119,15 @@ int LoadPart(std::string path) {
   const auto scene = tangent::server::ParseScene(doc.dump(), "cad_load_part.json", dir);
   const double load_s = Seconds(t0);
   const double load_mb = PeakMb(RUSAGE_SELF);
-  size_t triangles = 0;
-  int meshes = 0;
-  for (const auto& s : scene->surfaces) {
-    triangles += s.mesh.base.triangles.size();
-    meshes += !s.mesh.vertices.empty();
-  }
+  const auto [meshes, triangles] = MeshTotals(*scene);
   t0 = std::chrono::steady_clock::now();
   tangent::server::ServoLoop servo(*scene, tangent::server::ServoOptions{});
   const double servo_s = Seconds(t0);
   tangent::server::GlobalLink link(servo);
   tangent::server::Snapshot snap;
   servo.FillSnapshot(&snap);
-  t0 = std::chrono::steady_clock::now();
   int events = 0;
-  link.Pass(snap, [&](const tangent::server::ContactEventMsg&) { ++events; });
-  const double pass_s = Seconds(t0);
+  const double pass_s = TimedPass(link, snap, &events);
   std::printf(
       "cad_load: %s: %d faces (%d loops, %d skipped), %zu bodies; import %.2f s; scene load "
       "(import, %d offset meshes of %zu triangles, certified) %.2f s; servo built %.2f s; a "
@@ -209,12 +222,7 @@ int main(int argc, char** argv) {
   t0 = std::chrono::steady_clock::now();
   const auto scene = tangent::server::ParseScene(doc.dump(), "cad_load.json", dir);
   const double load_s = Seconds(t0);
-  size_t triangles = 0;
-  int meshes = 0;
-  for (const auto& s : scene->surfaces) {
-    triangles += s.mesh.base.triangles.size();
-    meshes += !s.mesh.vertices.empty();
-  }
+  const auto [meshes, triangles] = MeshTotals(*scene);
   std::printf(
       "cad_load: %s, %d faces (%d loops), %zu bodies; import %.2f s; scene load (import, %d "
       "offset meshes of %zu triangles, certified) %.2f s\n",
@@ -235,14 +243,10 @@ int main(int argc, char** argv) {
   tangent::server::GlobalLink link(servo);
   tangent::server::Snapshot snap;
   servo.FillSnapshot(&snap);
-  t0 = std::chrono::steady_clock::now();
   int events = 0;
-  link.Pass(snap, [&](const tangent::server::ContactEventMsg&) { ++events; });
-  const double pass_s = Seconds(t0);
+  const double pass_s = TimedPass(link, snap, &events);
   // Again: the first pass built the trees of the blocks it collided (Chunk::Object).
-  t0 = std::chrono::steady_clock::now();
-  link.Pass(snap, [&](const tangent::server::ContactEventMsg&) { ++events; });
-  const double second_pass_s = Seconds(t0);
+  const double second_pass_s = TimedPass(link, snap, &events);
   double beta = snap.num_contacts > 0 ? snap.contacts[0].beta : NAN;
   std::printf(
       "cad_load: body pair plate-ball: scene load %.2f s; servo built %.2f s with %zu contact "
