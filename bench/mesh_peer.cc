@@ -111,8 +111,8 @@ int main(int argc, char** argv) {
   Eigen::Vector4d u =
       contact::ClosestSamplePair(patch, BodyPose::FromCoordinates(path[0]), torus, pg, 40);
   for (size_t k = 0; k < path.size(); ++k) {
-    const contact::SurfaceSurfaceExtremum e =
-        contact::SolveSurfaceSurface(patch, BodyPose::FromCoordinates(path[k]), torus, pg, u);
+    const contact::SurfaceSurfaceExtremum e = contact::SolveSurfaceSurface(
+        patch, BodyPose::FromCoordinates(path[k]), torus, pg, u, contact::kContinuation);
     exact[k] = e.beta;
     u = e.u;
   }

@@ -9,6 +9,8 @@
 #include <Eigen/Cholesky>
 
 #include "contact/box_newton.h"
+#include "contact/neighbourhood.h"
+#include "contact/poles.h"
 #include "contact/relative_curvature.h"
 
 namespace tangent::contact {
@@ -131,6 +133,12 @@ void FillGradientForm(SurfacePairEval* out) {
 
 namespace {
 
+using internal::BestDeparture;
+using internal::FindPoleRow;
+using internal::PoleAction;
+using internal::PoleIsMinimum;
+using internal::PoleRow;
+
 template <int N>
 ExtremalStatus StatusOf(const internal::BoxNewtonResult<N>& r) {
   // A singular matrix at the end explains a budget run out (Newton is only linear there), so it
@@ -204,52 +212,6 @@ bool Acceptable(const internal::BoxNewtonResult<N>& r, const internal::NewtonSys
   return IsBoxMinimum<N>(r, s, lo, hi) || IsPenetration<N>(r, s);
 }
 
-// ---- Poles ----------------------------------------------------------------------------------
-//
-// At a pole row (a domain edge the parameterization collapses to a point, S_u = 0 along it) the
-// surface is smooth but Newton's matrix is singular: the angle parameter moves nothing there,
-// and a minimization reaching the pole can stop on it with the angle wherever the seed left it.
-// The pole is handled as the point it is: which way the surface leaves it is chosen by the
-// angle (the departure t(a) = ±∂S/∂across at the pole row), so from a pole either some departure
-// decreases the distance (the minimum is near the pole: restart just off it, along the best
-// departure) or none does (the pole is the extremum: d lies along the limit normal).
-
-enum class PoleAction { kNone, kEscape, kExtremum };
-
-// A pole row at or within 1e-3 of the domain from uv: the parameter across it (1: the row
-// v = bound, where S_u vanishes; 0: u = bound, where S_v vanishes), the bound, the inward sign.
-struct PoleRow {
-  bool found = false;
-  int across = 1;
-  double bound = 0.0;
-  double inward = 1.0;
-};
-PoleRow FindPoleRow(const nurbs::NurbsSurface& s, const Eigen::Vector2d& uv) {
-  for (int across : {1, 0}) {
-    const nurbs::KnotVector& k = across == 1 ? s.knots_v() : s.knots_u();
-    const double lo = k.domain_begin(), hi = k.domain_end(), w = hi - lo;
-    PoleRow row;
-    row.found = true;
-    row.across = across;
-    if (uv[across] - lo <= 1e-3 * w) {
-      row.bound = lo;
-      row.inward = 1.0;
-    } else if (hi - uv[across] <= 1e-3 * w) {
-      row.bound = hi;
-      row.inward = -1.0;
-    } else {
-      continue;
-    }
-    Eigen::Vector2d at = uv;
-    at[across] = row.bound;
-    const nurbs::SurfacePoint p = s.Evaluate(at[0], at[1], 1);
-    const Eigen::Vector3d& along = across == 1 ? p.S_u : p.S_v;
-    const Eigen::Vector3d& off = across == 1 ? p.S_v : p.S_u;
-    if (off.norm() > 0.0 && along.norm() <= nurbs::kDegenerateRatio * off.norm()) return row;
-  }
-  return {};
-}
-
 // NewtonSystem::touching for a surface pair at parameters x (limit normals at poles: a dome
 // touched at its pole is the common case). Off a pole the points must coincide to rounding
 // (kTouchingDistance): along the tangent plane a touching pair is fixed only to sqrt(2 R |d|).
@@ -267,52 +229,6 @@ bool Touching(const SurfacePairEval& e, double first_form_scale, const nurbs::Nu
   }
   if (dist <= internal::kTouchingDistance * size) return true;
   return FindPoleRow(f, x.head<2>()).found || FindPoleRow(g, x.tail<2>()).found;
-}
-
-// Number of departure angles sampled around a pole (the best is then refined by the solve).
-constexpr int kPoleAngles = 64;
-
-// The departure from the pole row of a placed surface that most decreases ½|d|², where moving
-// the surface's point by δp changes d by sign·δp: its slope per unit length (< 0: a descent),
-// and the angle parameter it leaves at.
-double BestDeparture(const nurbs::NurbsSurface& s, const BodyPose& pose, const PoleRow& row,
-                     const Eigen::Vector3d& d, double sign, double* angle) {
-  const nurbs::KnotVector& k = row.across == 1 ? s.knots_u() : s.knots_v();
-  double best = std::numeric_limits<double>::infinity();
-  for (int i = 0; i <= kPoleAngles; ++i) {
-    const double a = k.domain_begin() +
-                     (k.domain_end() - k.domain_begin()) * i / static_cast<double>(kPoleAngles);
-    const nurbs::SurfacePoint p =
-        row.across == 1 ? s.Evaluate(a, row.bound, 1) : s.Evaluate(row.bound, a, 1);
-    const Eigen::Vector3d t = pose.R_WB * (row.across == 1 ? p.S_v : p.S_u) * row.inward;
-    const double slope = sign * d.dot(t) / t.norm();
-    if (slope < best) {
-      best = slope;
-      *angle = a;
-    }
-  }
-  return best;
-}
-
-// Whether the pole point is a minimum of the distance over its neighbourhood on the surface:
-// ½|d|² with the other point fixed does not decrease at small departures in every direction
-// (the first order vanishes there, so this is the second-order test).
-bool PoleIsMinimum(const nurbs::NurbsSurface& s, const BodyPose& pose, const PoleRow& row,
-                   const Eigen::Vector3d& other) {
-  const nurbs::KnotVector& ka = row.across == 1 ? s.knots_u() : s.knots_v();
-  const nurbs::KnotVector& kx = row.across == 1 ? s.knots_v() : s.knots_u();
-  const Eigen::Vector3d pole =
-      pose.Point(row.across == 1 ? s.Evaluate(ka.domain_begin(), row.bound, 0).S
-                                 : s.Evaluate(row.bound, ka.domain_begin(), 0).S);
-  const double at_pole = (pole - other).squaredNorm();
-  const double off = row.bound + row.inward * 1e-4 * (kx.domain_end() - kx.domain_begin());
-  for (int i = 0; i < 16; ++i) {
-    const double a = ka.domain_begin() + (ka.domain_end() - ka.domain_begin()) * i / 16.0;
-    const Eigen::Vector3d p =
-        pose.Point(row.across == 1 ? s.Evaluate(a, off, 0).S : s.Evaluate(off, a, 0).S);
-    if ((p - other).squaredNorm() < at_pole * (1.0 - 1e-12)) return false;
-  }
-  return true;
 }
 
 // Newton from the seed; under Seek::kMinimum, when that does not end at an acceptable extremum,
@@ -457,6 +373,52 @@ double ScaledContactResidual(const SurfacePairEval& e, double beta) {
                   std::max(std::abs(e.F[2]), std::abs(e.F[3])) / (e.f.N_W.norm() * len_g));
 }
 
+namespace {
+
+// The neighbourhood search of ExtremalOptions::neighbourhood: SolveOnBox from each start of the
+// seed's neighbourhood (its edges' and corners' closest samples, and the window's), and the
+// nearest box minimum apart among them and the seed's own answer *r (at *sys, *e) replaces it.
+// A start's answer must be nearer by more than rounding: the same minimum found again keeps the
+// seed's answer.
+template <class Eval, class Pole>
+void NearestInNeighbourhood(Eval& eval, Pole& pole, const nurbs::NurbsSurface& f,
+                            const BodyPose& pose_f, const nurbs::NurbsSurface& g,
+                            const BodyPose& pose_g, const Eigen::Vector4d& seed,
+                            const Eigen::Vector4d& lo, const Eigen::Vector4d& hi,
+                            const internal::BoxNewtonOptions<4>& opt,
+                            const ExtremalOptions& options, internal::BoxNewtonResult<4>* r,
+                            internal::NewtonSystem<4>* sys, SurfacePairEval* e) {
+  const bool answered = IsBoxMinimum<4>(*r, *sys, lo, hi);
+  double nearest = answered ? std::sqrt(2.0 * sys->value) : std::numeric_limits<double>::infinity();
+  int iterations = r->iterations;
+  internal::NeighbourhoodStarts starts;
+  internal::FindNeighbourhoodStarts(f, pose_f, g, pose_g,
+                                    internal::ClampOrWrap<4>(seed, lo, hi, opt.periodic),
+                                    options.neighbourhood, &starts);
+  internal::BoxNewtonResult<4> best = *r;
+  internal::NewtonSystem<4> best_sys = *sys;
+  SurfacePairEval best_e = *e;
+  for (int k = 0; k < starts.n; ++k) {
+    internal::NewtonSystem<4> s;
+    const internal::BoxNewtonResult<4> c = SolveOnBox<4>(
+        eval, pole, starts.u[static_cast<size_t>(k)], lo, hi, opt, Seek::kMinimum, &s);
+    iterations += c.iterations;
+    const bool minimum = s.touching ? c.converged : IsBoxMinimum<4>(c, s, lo, hi);
+    const double distance = std::sqrt(2.0 * s.value);
+    if (!minimum || IsPenetration<4>(c, s) || !(distance < nearest * (1.0 - 1e-12))) continue;
+    nearest = distance;
+    best = c;
+    best_sys = s;
+    best_e = *e;  // the evaluation at c.x (SolveOnBox's contract)
+  }
+  *r = best;
+  r->iterations = iterations;
+  *sys = best_sys;
+  *e = best_e;
+}
+
+}  // namespace
+
 SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                                            const nurbs::NurbsSurface& g, const BodyPose& pose_g,
                                            const Eigen::Vector4d& seed,
@@ -529,8 +491,14 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
     return PoleAction::kNone;
   };
   internal::NewtonSystem<4> sys;
-  const auto r = SolveOnBox<4>(eval, pole, seed, lo, hi, opt, options.seek, &sys);
+  auto r = SolveOnBox<4>(eval, pole, seed, lo, hi, opt, options.seek, &sys);
   // e is the pair at r.x (SolveOnBox's contract).
+  if (options.seek == Seek::kMinimum && options.neighbourhood > 0.0 && !sys.touching &&
+      !IsPenetration<4>(r, sys) &&
+      internal::NeighbourhoodReachesBoundary(f, g, seed, options.neighbourhood)) {
+    NearestInNeighbourhood(eval, pole, f, pose_f, g, pose_g, seed, lo, hi, opt, options, &r, &sys,
+                           &e);
+  }
   SurfaceSurfaceExtremum out;
   FillPairFields(e, r.x, &out);
   out.at_bound = r.active;

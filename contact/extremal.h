@@ -46,7 +46,20 @@ struct ExtremalOptions {
   int max_iterations = 40;
   double step_tolerance = 1e-13;  ///< Newton step / domain width; ~500 ulp of a unit domain
   Seek seek = Seek::kMinimum;
+  /// How well a cold seed is known, as a fraction of each domain width (surface pairs under
+  /// Seek::kMinimum). When the seed's neighbourhood of ±neighbourhood reaches a domain edge,
+  /// the edges and corners in it are searched as well (their closest samples become further
+  /// starts, contact/neighbourhood.h) and the nearest minimum reached from any start is the
+  /// answer: a boundary minimum whose basin is too thin for the seed is not missed. 0: off, for
+  /// re-solves that continue a known extremum (kContinuation).
+  double neighbourhood = 0.1;
 };
+
+/// The options of a re-solve that continues a known extremum (the tracker's and the servo's
+/// re-solves, the global stage's refinement of its own seeds): the seed is the extremum's own
+/// last parameters, and a nearer minimum elsewhere in its neighbourhood is another contact,
+/// which the global stage finds, not this one.
+inline constexpr ExtremalOptions kContinuation{.neighbourhood = 0.0};
 
 /// Everything about a surface pair at parameters u = (u, v, s, t) and poses, in the world:
 /// the contact-regular equations F(u) = [d·g_s, d·g_t, N_f·g_s, N_f·g_t] (d = f − g, N_f = f_u ×

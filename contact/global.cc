@@ -663,7 +663,8 @@ void MinimaBeside(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
     }
     if (best == saddle.u) continue;
     SurfacePairEval q;
-    const SurfaceSurfaceExtremum e = SolveSurfaceSurface(f, pose_f, g, pose_g, best, {}, &q);
+    const SurfaceSurfaceExtremum e =
+        SolveSurfaceSurface(f, pose_f, g, pose_g, best, kContinuation, &q);
     if (e.status != ExtremalStatus::kConverged || !(e.alignment < 0.0) ||
         !(e.beta < options.activation) || !(e.beta > -options.max_penetration) ||
         side * (e.p_g - saddle.p_g).dot(rc.min_direction) < kSamePoint) {
@@ -700,7 +701,7 @@ void RefineClusters(const GlobalContactStage::Impl& m, const GlobalOptions& opti
       const Eigen::Vector4d seed = attempt == 0   ? ClusterMean(cl, domains)
                                    : attempt == 1 ? cl.u
                                                   : cl.members[static_cast<size_t>(attempt - 2)];
-      e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, seed, {}, &at);
+      e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, seed, kContinuation, &at);
       // On trimmed surfaces the face's extremal point may lie off the material (over a hole,
       // beyond a face's border): the contact is then the nearest trim edge's.
       on = MeasureOnMaterial(wa, pa, wb, pb, e);
@@ -778,7 +779,7 @@ void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
     bool jumped = false;
     if (e.status != ExtremalStatus::kConverged) {
       const double held_distance = at.d.norm();
-      e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, c.u, {}, &at);
+      e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, c.u, kContinuation, &at);
       jumped = FoundAnotherExtremum(*wa.s.surface, *wb.s.surface, c.u, e, held_distance);
     }
     // On trimmed surfaces: the edge contact where the face's point lies off the material.

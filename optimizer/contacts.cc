@@ -82,7 +82,8 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
     const Eigen::Vector4d& start =
         st->tracking && st->track_status == contact::TrackStatus::kTracked ? st->tracker.u()
                                                                            : st->u;
-    st->ext = contact::SolveSurfaceSurface(*f_, pf, *g_, pg, start, {}, &st->eval);
+    st->ext =
+        contact::SolveSurfaceSurface(*f_, pf, *g_, pg, start, contact::kContinuation, &st->eval);
     ++st->solves;
     bool held = false;
     // (The held pair is evaluated only after a far solve: the cheap test first.)

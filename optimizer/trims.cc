@@ -58,7 +58,8 @@ void TrimConstraintTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   if (st->valid && SamePose(pa.q, st->q_a) && SamePose(pb.q, st->q_b)) return;
   // Both extrema followed from their last parameters (the contact's pair: f against g; the
   // edge: g against the curve f(c(τ)), the curve–surface solver's order).
-  st->pair_ext = contact::SolveSurfaceSurface(*f_, pa, *g_, pb, st->pair, {}, &st->pair_eval);
+  st->pair_ext = contact::SolveSurfaceSurface(*f_, pa, *g_, pb, st->pair, contact::kContinuation,
+                                              &st->pair_eval);
   st->pair = st->pair_ext.u;
   st->edge_ext = contact::SolveCurveSurface(*g_, pb, edge_, pa, st->edge);
   st->edge = st->edge_ext.u;

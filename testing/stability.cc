@@ -162,8 +162,8 @@ std::vector<StabilityRow> RunKinematic(const KinematicSpec& c) {
       const Eigen::Vector4d before = st->u;
       poses[0] = BodyPose::FromCoordinates(q);
       term.Evaluate(poses, state.get(), r, J_a, J_b);
-      const contact::SurfaceSurfaceExtremum fresh =
-          contact::SolveSurfaceSurface(c.f, poses[0], c.g, poses[1], before);
+      const contact::SurfaceSurfaceExtremum fresh = contact::SolveSurfaceSurface(
+          c.f, poses[0], c.g, poses[1], before, contact::kContinuation);
       row.finite = row.finite && std::isfinite(r[0]) && J_a.allFinite() && J_b.allFinite() &&
                    st->ext.u.allFinite();
       if (std::isfinite(fresh.beta))
