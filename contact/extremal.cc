@@ -485,8 +485,16 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
         (*y)[i] = row.bound + row.inward * 1e-3 * (hi[i] - lo[i]);
         return PoleAction::kEscape;
       }
-      const bool minimum = q.kind == ExtremumKind::kMinimum && PoleIsMinimum(s, ps, row, q.p_f);
-      return minimum ? PoleAction::kExtremum : PoleAction::kNone;
+      // No first-order descent: the pole is the minimum, or a maximum or saddle of the
+      // distance, left along the departure that lowers it to second order.
+      if (!PoleIsMinimum(s, ps, row, q.p_f, &angle)) {
+        if (touching) return PoleAction::kNone;
+        const int i = 2 * side + row.across;
+        (*y)[2 * side + 1 - row.across] = angle;
+        (*y)[i] = row.bound + row.inward * 1e-3 * (hi[i] - lo[i]);
+        return PoleAction::kEscape;
+      }
+      return q.kind == ExtremumKind::kMinimum ? PoleAction::kExtremum : PoleAction::kNone;
     }
     return PoleAction::kNone;
   };
@@ -601,7 +609,13 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
       (*y)[i] = row.bound + row.inward * 1e-3 * (Hi(f)[i] - Lo(f)[i]);
       return PoleAction::kEscape;
     }
-    return PoleIsMinimum(f, pose_f, row, x_W) ? PoleAction::kExtremum : PoleAction::kNone;
+    // No first-order descent: the pole is the minimum, or a maximum or saddle of the distance,
+    // left along the departure that lowers it to second order.
+    if (PoleIsMinimum(f, pose_f, row, x_W, &angle)) return PoleAction::kExtremum;
+    const int i = row.across;
+    (*y)[1 - i] = angle;
+    (*y)[i] = row.bound + row.inward * 1e-3 * (Hi(f)[i] - Lo(f)[i]);
+    return PoleAction::kEscape;
   };
   internal::NewtonSystem<2> s;
   const auto r = SolveOnBox<2>(eval, pole, seed, Lo(f), Hi(f), opt, options.seek, &s);

@@ -22,8 +22,20 @@ struct Window {
   const Eigen::Vector3d& At(int i, int j) const { return x[static_cast<size_t>(i * kSide + j)]; }
 };
 
+/// Whether the domain edge where parameter d is held at `bound` collapses to a point (a pole
+/// row: the derivative along it vanishes). It is not an edge of the surface but one point of
+/// it, which the solver's pole handling answers for.
+bool IsPoleRow(const nurbs::NurbsSurface& s, int d, double bound, const Eigen::Vector2d& at) {
+  Eigen::Vector2d uv = at;
+  uv[d] = bound;
+  const nurbs::SurfacePoint p = s.Evaluate(uv[0], uv[1], 1);
+  const Eigen::Vector3d& along = d == 1 ? p.S_u : p.S_v;
+  const Eigen::Vector3d& across = d == 1 ? p.S_v : p.S_u;
+  return across.norm() > 0.0 && along.norm() <= nurbs::kDegenerateRatio * across.norm();
+}
+
 /// The window's box and the edges it reaches (a periodic direction has none: its ends are a
-/// seam, and its window is clamped to one period).
+/// seam, and its window is clamped to one period; nor has a pole row).
 void Bound(const nurbs::NurbsSurface& s, const Eigen::Vector2d& at, double radius, Window* w) {
   const nurbs::KnotVector* k[2] = {&s.knots_u(), &s.knots_v()};
   const bool periodic[2] = {s.periodic_u(), s.periodic_v()};
@@ -33,8 +45,8 @@ void Bound(const nurbs::NurbsSurface& s, const Eigen::Vector2d& at, double radiu
     w->hi[d] = std::min(b, at[d] + r);
     // edge index: d = 1 (v held) → 0, 1; d = 0 (u held) → 2, 3
     const int e = d == 1 ? 0 : 2;
-    w->edge[static_cast<size_t>(e)] = !periodic[d] && w->lo[d] <= a;
-    w->edge[static_cast<size_t>(e + 1)] = !periodic[d] && w->hi[d] >= b;
+    w->edge[static_cast<size_t>(e)] = !periodic[d] && w->lo[d] <= a && !IsPoleRow(s, d, a, at);
+    w->edge[static_cast<size_t>(e + 1)] = !periodic[d] && w->hi[d] >= b && !IsPoleRow(s, d, b, at);
   }
 }
 

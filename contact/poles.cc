@@ -59,7 +59,7 @@ double BestDeparture(const nurbs::NurbsSurface& s, const BodyPose& pose, const P
 
 // ½|d|² with the other point fixed must not decrease at small departures in any direction.
 bool PoleIsMinimum(const nurbs::NurbsSurface& s, const BodyPose& pose, const PoleRow& row,
-                   const Eigen::Vector3d& other) {
+                   const Eigen::Vector3d& other, double* descent_angle) {
   const nurbs::KnotVector& ka = row.across == 1 ? s.knots_u() : s.knots_v();
   const nurbs::KnotVector& kx = row.across == 1 ? s.knots_v() : s.knots_u();
   const Eigen::Vector3d pole =
@@ -67,13 +67,20 @@ bool PoleIsMinimum(const nurbs::NurbsSurface& s, const BodyPose& pose, const Pol
                                  : s.Evaluate(row.bound, ka.domain_begin(), 0).S);
   const double at_pole = (pole - other).squaredNorm();
   const double off = row.bound + row.inward * 1e-4 * (kx.domain_end() - kx.domain_begin());
+  double lowest = at_pole * (1.0 - 1e-12);
+  bool minimum = true;
   for (int i = 0; i < 16; ++i) {
     const double a = ka.domain_begin() + (ka.domain_end() - ka.domain_begin()) * i / 16.0;
     const Eigen::Vector3d p =
         pose.Point(row.across == 1 ? s.Evaluate(a, off, 0).S : s.Evaluate(off, a, 0).S);
-    if ((p - other).squaredNorm() < at_pole * (1.0 - 1e-12)) return false;
+    const double d = (p - other).squaredNorm();
+    if (d < lowest) {
+      lowest = d;
+      minimum = false;
+      if (descent_angle) *descent_angle = a;
+    }
   }
-  return true;
+  return minimum;
 }
 
 }  // namespace tangent::contact::internal

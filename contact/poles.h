@@ -38,8 +38,11 @@ double BestDeparture(const nurbs::NurbsSurface& s, const BodyPose& pose, const P
                      const Eigen::Vector3d& d, double sign, double* angle);
 
 /// Whether the pole point is a minimum of the distance to `other` over its neighbourhood on the
-/// surface (the second-order test: the first order vanishes at a pole).
+/// surface (the second-order test: the first order vanishes at a pole). When it is not,
+/// *descent_angle (optional) gets the angle parameter of the departure that lowers it most: at
+/// a pole that is the distance's maximum or a saddle (the far pole of a sphere over a plane)
+/// the first-order test finds no descent, and the minimization leaves along this one.
 bool PoleIsMinimum(const nurbs::NurbsSurface& s, const BodyPose& pose, const PoleRow& row,
-                   const Eigen::Vector3d& other);
+                   const Eigen::Vector3d& other, double* descent_angle = nullptr);
 
 }  // namespace tangent::contact::internal
