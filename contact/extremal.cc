@@ -375,6 +375,38 @@ double ScaledContactResidual(const SurfacePairEval& e, double beta) {
 
 namespace {
 
+// A pair whose point on one surface is a vertex pole (IsVertex): on which surface, and whether
+// the pole is a minimum of the distance to the other point.
+struct VertexPole {
+  bool found = false;
+  bool on_f = true;
+  bool minimum = false;
+};
+VertexPole VertexAt(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                    const nurbs::NurbsSurface& g, const BodyPose& pose_g, const Eigen::Vector4d& x,
+                    const SurfacePairEval& e) {
+  VertexPole out;
+  for (int k = 0; k < 2; ++k) {
+    const nurbs::NurbsSurface& s = k == 0 ? f : g;
+    const Eigen::Vector2d uv = x.segment<2>(2 * k);
+    const PoleRow row = FindPoleRow(s, uv);
+    // On the row, or within rounding of it (Newton on F stops ~1e-13 from a pole it is singular
+    // at, as in a pressed apex's penetration extremum).
+    const nurbs::KnotVector& k_across = row.across == 1 ? s.knots_v() : s.knots_u();
+    const double width = k_across.domain_end() - k_across.domain_begin();
+    if (!row.found || std::abs(uv[row.across] - row.bound) > 1e-9 * width ||
+        !internal::IsVertex(s, row)) {
+      continue;
+    }
+    out.found = true;
+    out.on_f = k == 0;
+    out.minimum = k == 0 ? PoleIsMinimum(f, pose_f, row, e.g.world.S)
+                         : PoleIsMinimum(g, pose_g, row, e.f.world.S);
+    return out;
+  }
+  return out;
+}
+
 // The neighbourhood search of ExtremalOptions::neighbourhood: SolveOnBox from each start of the
 // seed's neighbourhood (its edges' and corners' closest samples, and the window's), and the
 // nearest box minimum apart among them and the seed's own answer *r (at *sys, *e) replaces it.
@@ -517,6 +549,26 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
     out.beta = side * dist;
   }
   out.status = StatusOf(r);
+  // At a vertex (a cone's apex) the answer is the pole itself (SolveOnBox), and that surface has
+  // no normal there: β is measured along the other surface's normal (the vertex's foot on it is
+  // along that normal, touching and pressed in too), or, where the other point is held on a
+  // boundary, along d as at a boundary; the kind is the pole's own second-order test.
+  if (const VertexPole v = VertexAt(f, pose_f, g, pose_g, r.x, e); v.found) {
+    const bool other_held = v.on_f ? (r.active[2] || r.active[3]) : (r.active[0] || r.active[1]);
+    if (other_held && dist > 0.0) {
+      const double side = v.on_f ? (e.d.dot(e.g.unit_normal()) < 0.0 ? -1.0 : 1.0)
+                                 : (e.d.dot(e.f.unit_normal()) > 0.0 ? -1.0 : 1.0);
+      out.direction = side * (e.d / dist);
+    } else {
+      out.direction = v.on_f ? e.g.unit_normal() : Eigen::Vector3d(-e.f.unit_normal());
+    }
+    out.beta = e.d.dot(out.direction);
+    out.kind = v.minimum ? ExtremumKind::kMinimum : ExtremumKind::kSaddle;
+    out.iterations = r.iterations;
+    out.rcond = r.rcond;
+    if (at_solution) *at_solution = e;
+    return out;
+  }
   // Touching: the Hessian of ½|d|² is singular there (rank 2), so the relative curvature
   // decides: the surfaces on either side of the tangent plane (a minimum of the distance, zero),
   // or crossing near the point (a saddle: β ≥ 0 there would let them interpenetrate off it).

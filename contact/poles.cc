@@ -83,4 +83,20 @@ bool PoleIsMinimum(const nurbs::NurbsSurface& s, const BodyPose& pose, const Pol
   return minimum;
 }
 
+bool IsVertex(const nurbs::NurbsSurface& s, const PoleRow& row) {
+  const nurbs::KnotVector& ka = row.across == 1 ? s.knots_u() : s.knots_v();
+  Eigen::Vector3d first = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 3; ++i) {
+    const double a = ka.domain_begin() + (ka.domain_end() - ka.domain_begin()) * (i + 0.25) / 3.0;
+    const double u = row.across == 1 ? a : row.bound, v = row.across == 1 ? row.bound : a;
+    const Eigen::Vector3d n = nurbs::UnitNormal(s, u, v, s.Evaluate(u, v, 2));
+    if (i == 0) {
+      first = n;
+    } else if ((n - first).norm() > 1e-6) {
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace tangent::contact::internal

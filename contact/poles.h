@@ -45,4 +45,10 @@ double BestDeparture(const nurbs::NurbsSurface& s, const BodyPose& pose, const P
 bool PoleIsMinimum(const nurbs::NurbsSurface& s, const BodyPose& pose, const PoleRow& row,
                    const Eigen::Vector3d& other, double* descent_angle = nullptr);
 
+/// Whether the pole row is a vertex (a cone's apex, a revolved profile meeting its axis at an
+/// angle): the limit normal depends on the direction the surface leaves the pole in, so the
+/// surface has no tangent plane there. At a smooth pole (a sphere's) it is one normal. Measured
+/// at three angles: a vertex when two limit normals differ by more than 1e-6.
+bool IsVertex(const nurbs::NurbsSurface& s, const PoleRow& row);
+
 }  // namespace tangent::contact::internal

@@ -108,6 +108,14 @@ NurbsSurface MakeCylinder(double radius, double height) {
                  KnotVector(1, {0, 0, 1, 1}));
 }
 
+NurbsSurface MakeCone(double radius, double height) {
+  if (!(radius > 0.0) || !(height > 0.0) || !std::isfinite(radius) || !std::isfinite(height)) {
+    throw std::invalid_argument("cone: radius and height must be positive and finite");
+  }
+  return Revolve(Eigen::Vector3d::Zero(), {{0.0, 0.0}, {radius, height}}, {1.0, 1.0},
+                 KnotVector(1, {0, 0, 1, 1}));
+}
+
 NurbsSurface MakeBarrel(double radius, double height, double crown) {
   if (!(radius > 0.0) || !(height > 0.0) || !std::isfinite(radius) || !std::isfinite(height)) {
     throw std::invalid_argument("barrel: radius and height must be positive");

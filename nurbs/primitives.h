@@ -27,6 +27,11 @@ NurbsSurface MakeSphere(const Eigen::Vector3d& center, double radius);
 /// Cylinder of `radius` about +z from z = 0 to z = height: u ∈ [0,1] around, v ∈ [0,1] along.
 NurbsSurface MakeCylinder(double radius, double height);
 
+/// Cone about +z with its apex at the origin and its base circle of `radius` at z = height:
+/// u ∈ [0,1] around, v ∈ [0,1] from the apex (a pole row: S_u = 0 at v = 0, where the surface
+/// has a vertex, not a tangent plane) to the base.
+NurbsSurface MakeCone(double radius, double height);
+
 /// Barrel about +z from z = 0 to z = height: the profile a circular arc of radius `crown` (the
 /// crown radius, > height / 2) whose widest point, `radius` from the axis, is at mid-height; the
 /// ends are radius − crown + √(crown² − height²/4) from the axis. u ∈ [0,1] around, v ∈ [0,1]

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <stdexcept>
+#include <string>
 
 #include <Eigen/Geometry>
 
@@ -111,6 +113,31 @@ TEST(PrimitivesTest, CylinderAndTorusRadii) {
   });
   EXPECT_LE(worst_cyl, 1e-16);  // 0.02 m radius: 1e-16 m is ~30 ulp.
   EXPECT_LE(worst_torus, 1e-16);
+}
+
+// A cone's points lie on it (radius proportional to height), its apex row is one point with
+// S_u = 0, and bad sizes are refused with the reason.
+TEST(PrimitivesTest, ConeIsALinearProfileRevolvedWithItsApexAtTheOrigin) {
+  const NurbsSurface cone = MakeCone(0.02, 0.04);
+  double worst = 0.0;
+  ForGrid(cone, 100, [&](double, double v, const SurfacePoint& p) {
+    worst = std::max(worst, std::abs(p.S.head<2>().norm() - 0.5 * p.S.z()));
+    EXPECT_NEAR(p.S.z(), 0.04 * v, 1e-16);
+  });
+  EXPECT_LE(worst, 1e-16);
+  for (double u : {0.0, 0.3, 0.77}) {
+    const SurfacePoint apex = cone.Evaluate(u, 0.0, 1);
+    EXPECT_LE(apex.S.norm(), 1e-18);
+    EXPECT_LE(apex.S_u.norm(), 1e-18);
+    EXPECT_GT(apex.S_v.norm(), 0.04);
+  }
+  try {
+    MakeCone(0.0, 0.04);
+    ADD_FAILURE() << "a zero radius was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("cone: radius and height must be positive"),
+              std::string::npos);
+  }
 }
 
 // Distance from a point in z = 0 to the paperclip's centre line, by brute force over the
