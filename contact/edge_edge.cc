@@ -1,0 +1,162 @@
+#include "contact/edge_edge.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "contact/box_newton.h"
+#include "contact/rigid.h"
+
+namespace tangent::contact {
+
+void EvaluateCurveCurve(const BodyCurve& a, const BodyPose& pose_a, const BodyCurve& b,
+                        const BodyPose& pose_b, const Eigen::Vector2d& x, int* span_a,
+                        nurbs::SpanHint* hint_a, int* span_b, nurbs::SpanHint* hint_b,
+                        CurveCurveEval* out) {
+  EvaluatePlaced(a, pose_a, x[0], span_a, hint_a, &out->a);
+  EvaluatePlaced(b, pose_b, x[1], span_b, hint_b, &out->b);
+  const nurbs::CurvePoint<3>& A = out->a.world;
+  const nurbs::CurvePoint<3>& B = out->b.world;
+  out->d = A.C - B.C;
+  out->grad << out->d.dot(A.C1), -out->d.dot(B.C1);
+  out->hess << A.C1.squaredNorm() + out->d.dot(A.C2), -A.C1.dot(B.C1), -A.C1.dot(B.C1),
+      B.C1.squaredNorm() - out->d.dot(B.C2);
+}
+
+CurveCurveExtremum SolveCurveCurve(const BodyCurve& a, const BodyPose& pose_a, const BodyCurve& b,
+                                   const BodyPose& pose_b, const Eigen::Vector2d& seed,
+                                   const ExtremalOptions& options, CurveCurveEval* at_solution) {
+  CurveCurveExtremum out;
+  const Eigen::Vector2d lo(a.domain_begin(), b.domain_begin());
+  const Eigen::Vector2d hi(a.domain_end(), b.domain_end());
+  if (!seed.allFinite() || !pose_a.q.allFinite() || !pose_b.q.allFinite()) {
+    out.x = 0.5 * (lo + hi);
+    out.status = ExtremalStatus::kInvalidInput;
+    return out;
+  }
+  int span_a = 0, span_b = 0;
+  nurbs::SpanHint hint_a, hint_b;
+  CurveCurveEval e;
+  // The gradient is the interior system too: its Jacobian (the Hessian) is regular at contact.
+  auto eval = [&](const Eigen::Vector2d& x, internal::NewtonSystem<2>* s) {
+    EvaluateCurveCurve(a, pose_a, b, pose_b, x, &span_a, &hint_a, &span_b, &hint_b, &e);
+    s->value = 0.5 * e.d.squaredNorm();
+    s->F = e.grad;
+    s->J = e.hess;
+    s->grad = e.grad;
+    s->hess = e.hess;
+    s->classify_scale = std::max(e.a.world.C1.squaredNorm(), e.b.world.C1.squaredNorm());
+  };
+  internal::BoxNewtonOptions<2> opt;
+  opt.max_iterations = options.max_iterations;
+  opt.step_tolerance = options.step_tolerance;
+  opt.periodic = {a.periodic(), b.periodic()};
+  internal::NewtonSystem<2> sys;
+  auto is_minimum = [&](const internal::BoxNewtonResult<2>& r) {
+    if (!r.converged || r.singular) return false;
+    for (int i = 0; i < 2; ++i) {
+      if (r.active[static_cast<size_t>(i)] &&
+          !internal::HoldsAsMinimum<2>(r.x, sys.grad, lo, hi, i))
+        return false;
+    }
+    if (r.active[0] && r.active[1]) return true;
+    return internal::Classify<2>(sys.hess, r.active, sys.classify_scale) == ExtremumKind::kMinimum;
+  };
+  auto recorded = [&](const Eigen::Vector2d& x, internal::NewtonSystem<2>* s) {
+    eval(x, s);
+    sys = *s;
+  };
+  internal::BoxNewtonResult<2> r = internal::BoxNewton<2>(recorded, seed, lo, hi, opt);
+  int iterations = r.iterations;
+  if (options.seek == Seek::kMinimum && !is_minimum(r)) {
+    const internal::BoxNewtonResult<2> m = internal::BoxMinimize<2>(recorded, seed, lo, hi, opt);
+    internal::BoxNewtonOptions<2> polish = opt;
+    polish.initial_active = m.active;
+    polish.release_by_gradient = true;
+    r = internal::BoxNewton<2>(recorded, m.x, lo, hi, polish);
+    iterations += m.iterations + r.iterations;
+  }
+  out.x = r.x;
+  out.p_a = e.a.world.C;
+  out.p_b = e.b.world.C;
+  out.distance = e.d.norm();
+  out.at_bound = r.active;
+  out.iterations = iterations;
+  if (r.singular) {
+    out.status = ExtremalStatus::kSingular;
+  } else if (!r.converged) {
+    out.status = ExtremalStatus::kNotConverged;
+  } else {
+    out.status =
+        r.active[0] || r.active[1] ? ExtremalStatus::kAtBoundary : ExtremalStatus::kConverged;
+  }
+  if (is_minimum(r)) {
+    out.kind = ExtremumKind::kMinimum;
+  } else {
+    out.kind = internal::Classify<2>(sys.hess, r.active, sys.classify_scale);
+  }
+  if (at_solution) *at_solution = e;
+  return out;
+}
+
+namespace {
+
+// ∂d/∂q at fixed (s, t) (3 x 14) and the curves' tangents' ∂a'/∂q_A, ∂b'/∂q_B (3 x 7 each).
+struct PoseDerivatives {
+  Matrix3x14 d_q;
+  Matrix37d a1_q, b1_q;
+};
+PoseDerivatives Derivatives(const CurveCurveEval& e, const BodyPose& pose_a,
+                            const BodyPose& pose_b) {
+  PoseDerivatives p;
+  p.d_q << PointJacobian(pose_a, e.a.body.C), -PointJacobian(pose_b, e.b.body.C);
+  p.a1_q = DirectionJacobian(pose_a, e.a.body.C1);
+  p.b1_q = DirectionJacobian(pose_b, e.b.body.C1);
+  return p;
+}
+
+}  // namespace
+
+bool CurveCurveJacobian(const CurveCurveEval& e, const BodyPose& pose_a, const BodyPose& pose_b,
+                        Matrix2x14* x_q) {
+  const PoseDerivatives p = Derivatives(e, pose_a, pose_b);
+  const Eigen::Vector3d& a1 = e.a.world.C1;
+  const Eigen::Vector3d& b1 = e.b.world.C1;
+  Matrix2x14 grad_q;
+  grad_q.row(0) = a1.transpose() * p.d_q;
+  grad_q.row(0).leftCols<7>() += e.d.transpose() * p.a1_q;
+  grad_q.row(1) = -b1.transpose() * p.d_q;
+  grad_q.row(1).rightCols<7>() -= e.d.transpose() * p.b1_q;
+  const auto lu = internal::Factor<2>(e.hess);
+  double rcond = 0.0;
+  const double scale = std::max(a1.squaredNorm(), b1.squaredNorm());
+  if (internal::IsSingular<2>(lu, scale, &rcond)) return false;
+  *x_q = -lu.solve(grad_q);
+  return true;
+}
+
+Row14 CurveCurveDistanceGradient(const CurveCurveEval& e, const BodyPose& pose_a,
+                                 const BodyPose& pose_b) {
+  const Eigen::Vector3d n = e.d.normalized();
+  return n.transpose() * Derivatives(e, pose_a, pose_b).d_q;
+}
+
+Matrix14d CurveCurveDistanceHessian(const CurveCurveEval& e, const BodyPose& pose_a,
+                                    const BodyPose& pose_b, const Matrix2x14& x_q) {
+  const PoseDerivatives p = Derivatives(e, pose_a, pose_b);
+  const double len = e.d.norm();
+  const Eigen::Vector3d n = e.d / len;
+  Matrix3x14 D = p.d_q + e.a.world.C1 * x_q.row(0) - e.b.world.C1 * x_q.row(1);
+  const Matrix3x14 n_q = (Eigen::Matrix3d::Identity() - n * n.transpose()) * D / len;
+  Matrix14d H = p.d_q.transpose() * n_q;  // H(i, j) = ∂(gradient_i)/∂q_j
+  // n·∂²d/∂q²: each body's rotation curvature of its point (positions enter linearly).
+  H.block<4, 4>(3, 3) += RotateHessian(pose_a.q.tail<4>(), e.a.body.C, n);
+  H.block<4, 4>(10, 10) -= RotateHessian(pose_b.q.tail<4>(), e.b.body.C, n);
+  // The point Jacobians' own change with the parameters, times the parameters' motion.
+  Row14 v_s = Row14::Zero(), v_t = Row14::Zero();
+  v_s.leftCols<7>() = n.transpose() * p.a1_q;
+  v_t.rightCols<7>() = -n.transpose() * p.b1_q;
+  H += v_s.transpose() * x_q.row(0) + v_t.transpose() * x_q.row(1);
+  return H;
+}
+
+}  // namespace tangent::contact
