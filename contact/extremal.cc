@@ -408,7 +408,7 @@ VertexPole VertexAt(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
 }
 
 // The neighbourhood search of ExtremalOptions::neighbourhood: SolveOnBox from each start of the
-// seed's neighbourhood (its edges' and corners' closest samples, and the window's), and the
+// seed's neighbourhood (its edges' and corners' closest samples), and the
 // nearest box minimum apart among them and the seed's own answer *r (at *sys, *e) replaces it.
 // A start's answer must be nearer by more than rounding: the same minimum found again keeps the
 // seed's answer.

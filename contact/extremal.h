@@ -49,9 +49,9 @@ struct ExtremalOptions {
   /// How well a cold seed is known, as a fraction of each domain width (surface pairs under
   /// Seek::kMinimum). When the seed's neighbourhood of ±neighbourhood reaches a domain edge,
   /// the edges and corners in it are searched as well (their closest samples become further
-  /// starts, contact/neighbourhood.h) and the nearest minimum reached from any start is the
-  /// answer: a boundary minimum whose basin is too thin for the seed is not missed. 0: off, for
-  /// re-solves that continue a known extremum (kContinuation).
+  /// starts, contact/neighbourhood.h) and the nearest minimum reached from the seed or any of
+  /// them is the answer: a boundary minimum whose basin is too thin for the seed is not missed. 0:
+  /// off, for re-solves that continue a known extremum (kContinuation).
   double neighbourhood = 0.1;
 };
 

@@ -82,29 +82,19 @@ double ClosestTo(const Window& b, const Eigen::Vector3d& x, int* bi, int* bj) {
   return best;
 }
 
-/// The closest pair of a's samples on edge e (or all of a's, e < 0) against b's window, as the
-/// pair's parameters (a first when a_is_f).
+/// The closest pair of a's samples on edge e against b's window, as the pair's parameters (a
+/// first when a_is_f).
 Eigen::Vector4d ClosestPair(const Window& a, int e, const Window& b, bool a_is_f) {
   double best = std::numeric_limits<double>::infinity();
   Eigen::Vector2d on_a = a.lo, on_b = b.lo;
-  auto consider = [&](int i, int j) {
-    int bi = 0, bj = 0;
+  for (int k = 0; k < kSide; ++k) {
+    int i = 0, j = 0, bi = 0, bj = 0;
+    EdgeSample(e, k, &i, &j);
     const double d = ClosestTo(b, a.At(i, j), &bi, &bj);
     if (d < best) {
       best = d;
       on_a = a.Uv(i, j);
       on_b = b.Uv(bi, bj);
-    }
-  };
-  if (e >= 0) {
-    for (int k = 0; k < kSide; ++k) {
-      int i = 0, j = 0;
-      EdgeSample(e, k, &i, &j);
-      consider(i, j);
-    }
-  } else {
-    for (int i = 0; i < kSide; ++i) {
-      for (int j = 0; j < kSide; ++j) consider(i, j);
     }
   }
   Eigen::Vector4d u;
@@ -136,8 +126,7 @@ void FindNeighbourhoodStarts(const nurbs::NurbsSurface& f, const BodyPose& pose_
   Bound(g, seed.tail<2>(), radius, &wg);
   Sample(f, pose_f, &wf);
   Sample(g, pose_g, &wg);
-  // A start found twice (a corner sample is on two edges; the window's closest pair is often
-  // an edge's) is solved once.
+  // A start found twice (a corner sample is on two edges) is solved once.
   auto add = [out](const Eigen::Vector4d& u) {
     for (int k = 0; k < out->n; ++k) {
       if (out->u[static_cast<size_t>(k)] == u) return;
@@ -148,7 +137,6 @@ void FindNeighbourhoodStarts(const nurbs::NurbsSurface& f, const BodyPose& pose_
     if (wf.edge[static_cast<size_t>(e)]) add(ClosestPair(wf, e, wg, /*a_is_f=*/true));
     if (wg.edge[static_cast<size_t>(e)]) add(ClosestPair(wg, e, wf, /*a_is_f=*/false));
   }
-  add(ClosestPair(wf, -1, wg, /*a_is_f=*/true));
 }
 
 }  // namespace tangent::contact::internal

@@ -21,9 +21,9 @@ namespace tangent::contact::internal {
 /// ±10 % of the domain is sampled every 2.5 % of it.
 inline constexpr int kWindowSamples = 8;
 
-/// At most one start per domain edge of each surface (4 + 4) and one for the whole window.
+/// At most one start per domain edge of each surface (4 + 4).
 struct NeighbourhoodStarts {
-  std::array<Eigen::Vector4d, 9> u;
+  std::array<Eigen::Vector4d, 8> u;
   int n = 0;
 };
 
@@ -35,7 +35,8 @@ bool NeighbourhoodReachesBoundary(const nurbs::NurbsSurface& f, const nurbs::Nur
 /// The starts of the neighbourhood of `seed`: each surface's window (the domain within ±radius
 /// of each width around the seed's parameters) sampled on a (kWindowSamples+1)² grid; for each
 /// domain edge the window reaches, the closest pair of its samples on that edge against the
-/// other surface's window; and the closest pair of the two windows. Allocation free.
+/// other surface's window. Only boundary candidates: a nearer interior minimum beside the seed
+/// is another basin's, which a cold seed's caller did not ask for. Allocation free.
 void FindNeighbourhoodStarts(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                              const nurbs::NurbsSurface& g, const BodyPose& pose_g,
                              const Eigen::Vector4d& seed, double radius, NeighbourhoodStarts* out);
