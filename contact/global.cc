@@ -723,6 +723,16 @@ void RefineClusters(const GlobalContactStage::Impl& m, const GlobalOptions& opti
         ok = (e.status == ExtremalStatus::kConverged || HeldOnMaterialBorder(wa, wb, e, on)) &&
              e.beta < options.activation && e.beta > -options.max_penetration && e.alignment < 0.0;
       }
+      // The cluster's own minimum, apart by more than the activation distance where the offsets
+      // met (its points within ρ of there): no contact here, and the other seeds would only find
+      // it again. (The retries are for seeds that reach another region's pair, such as a deep
+      // contact's far sides, which lie below −max_penetration. Measured on twenty clips' cold
+      // pass: 380 of 2,035 clusters ended so, each retried three times.)
+      if (!ok && !on.on_edge && e.status == ExtremalStatus::kConverged &&
+          e.kind == ExtremumKind::kMinimum && e.beta >= options.activation &&
+          (0.5 * (e.p_f + e.p_g) - cl.x).norm() < options.neglect_radius) {
+        break;
+      }
     }
     if (!ok) continue;
     // A saddle of the distance is not a contact: the minima beside it are. (Held on a border,
