@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "contact/box_newton.h"
 #include "contact/rigid.h"
+#include "contact/solve_on_box.h"
 
 namespace tangent::contact {
 
@@ -46,54 +46,22 @@ CurveCurveExtremum SolveCurveCurve(const BodyCurve& a, const BodyPose& pose_a, c
     s->hess = e.hess;
     s->classify_scale = std::max(e.a.world.C1.squaredNorm(), e.b.world.C1.squaredNorm());
   };
-  internal::BoxNewtonOptions<2> opt;
-  opt.max_iterations = options.max_iterations;
-  opt.step_tolerance = options.step_tolerance;
+  auto opt = internal::BoxOptionsOf<2>(options);
   opt.periodic = {a.periodic(), b.periodic()};
+  auto no_pole = [](const Eigen::Vector2d&, Eigen::Vector2d*) {
+    return internal::PoleAction::kNone;
+  };
   internal::NewtonSystem<2> sys;
-  auto is_minimum = [&](const internal::BoxNewtonResult<2>& r) {
-    if (!r.converged || r.singular) return false;
-    for (int i = 0; i < 2; ++i) {
-      if (r.active[static_cast<size_t>(i)] &&
-          !internal::HoldsAsMinimum<2>(r.x, sys.grad, lo, hi, i))
-        return false;
-    }
-    if (r.active[0] && r.active[1]) return true;
-    return internal::Classify<2>(sys.hess, r.active, sys.classify_scale) == ExtremumKind::kMinimum;
-  };
-  auto recorded = [&](const Eigen::Vector2d& x, internal::NewtonSystem<2>* s) {
-    eval(x, s);
-    sys = *s;
-  };
-  internal::BoxNewtonResult<2> r = internal::BoxNewton<2>(recorded, seed, lo, hi, opt);
-  int iterations = r.iterations;
-  if (options.seek == Seek::kMinimum && !is_minimum(r)) {
-    const internal::BoxNewtonResult<2> m = internal::BoxMinimize<2>(recorded, seed, lo, hi, opt);
-    internal::BoxNewtonOptions<2> polish = opt;
-    polish.initial_active = m.active;
-    polish.release_by_gradient = true;
-    r = internal::BoxNewton<2>(recorded, m.x, lo, hi, polish);
-    iterations += m.iterations + r.iterations;
-  }
+  const internal::BoxNewtonResult<2> r =
+      internal::SolveOnBox<2>(eval, no_pole, seed, lo, hi, opt, options.seek, &sys);
   out.x = r.x;
   out.p_a = e.a.world.C;
   out.p_b = e.b.world.C;
   out.distance = e.d.norm();
   out.at_bound = r.active;
-  out.iterations = iterations;
-  if (r.singular) {
-    out.status = ExtremalStatus::kSingular;
-  } else if (!r.converged) {
-    out.status = ExtremalStatus::kNotConverged;
-  } else {
-    out.status =
-        r.active[0] || r.active[1] ? ExtremalStatus::kAtBoundary : ExtremalStatus::kConverged;
-  }
-  if (is_minimum(r)) {
-    out.kind = ExtremumKind::kMinimum;
-  } else {
-    out.kind = internal::Classify<2>(sys.hess, r.active, sys.classify_scale);
-  }
+  out.iterations = r.iterations;
+  out.status = internal::StatusOf(r);
+  out.kind = internal::KindAt<2>(r, sys, lo, hi);
   if (at_solution) *at_solution = e;
   return out;
 }

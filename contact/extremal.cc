@@ -12,6 +12,7 @@
 #include "contact/neighbourhood.h"
 #include "contact/poles.h"
 #include "contact/relative_curvature.h"
+#include "contact/solve_on_box.h"
 
 namespace tangent::contact {
 
@@ -139,28 +140,16 @@ using internal::PoleAction;
 using internal::PoleIsMinimum;
 using internal::PoleRow;
 
-template <int N>
-ExtremalStatus StatusOf(const internal::BoxNewtonResult<N>& r) {
-  // A singular matrix at the end explains a budget run out (Newton is only linear there), so it
-  // takes precedence over "not converged".
-  if (r.singular) return ExtremalStatus::kSingular;
-  if (!r.converged) return ExtremalStatus::kNotConverged;
-  if (std::any_of(r.active.begin(), r.active.end(), [](bool b) { return b; })) {
-    return ExtremalStatus::kAtBoundary;
-  }
-  return ExtremalStatus::kConverged;
-}
+using internal::Acceptable;
+using internal::BoxOptionsOf;
+using internal::IsBoxMinimum;
+using internal::IsPenetration;
+using internal::KindAt;
+using internal::SolveOnBox;
+using internal::StatusOf;
 
 double FirstFormScale(const nurbs::SurfacePoint& p) {
   return std::max(p.S_u.squaredNorm(), p.S_v.squaredNorm());
-}
-
-template <int N>
-internal::BoxNewtonOptions<N> Convert(const ExtremalOptions& o) {
-  internal::BoxNewtonOptions<N> b;
-  b.max_iterations = o.max_iterations;
-  b.step_tolerance = o.step_tolerance;
-  return b;
 }
 
 Eigen::Vector2d Lo(const nurbs::NurbsSurface& s) {
@@ -168,48 +157,6 @@ Eigen::Vector2d Lo(const nurbs::NurbsSurface& s) {
 }
 Eigen::Vector2d Hi(const nurbs::NurbsSurface& s) {
   return {s.knots_u().domain_end(), s.knots_v().domain_end()};
-}
-
-// The kind of a box extremum: the inertia on the free parameters (Classify); at a vertex of the
-// box (nothing free) the held multipliers' signs decide: all of a minimum's, a minimum; all of a
-// maximum's, a maximum; mixed, a saddle.
-template <int N>
-ExtremumKind KindAt(const internal::BoxNewtonResult<N>& r, const internal::NewtonSystem<N>& s,
-                    const Eigen::Matrix<double, N, 1>& lo, const Eigen::Matrix<double, N, 1>& hi) {
-  if (!std::all_of(r.active.begin(), r.active.end(), [](bool b) { return b; }))
-    return internal::Classify<N>(s.hess, r.active, s.classify_scale);
-  int as_min = 0;
-  for (int i = 0; i < N; ++i) as_min += internal::HoldsAsMinimum<N>(r.x, s.grad, lo, hi, i);
-  if (as_min == N) return ExtremumKind::kMinimum;
-  if (as_min == 0) return ExtremumKind::kMaximum;
-  return ExtremumKind::kSaddle;
-}
-
-// A result that is a minimum of ½|d|² on the box: converged, regular, every held parameter's
-// multiplier of a minimum's sign, and the Hessian on the free parameters positive (semi)definite.
-template <int N>
-bool IsBoxMinimum(const internal::BoxNewtonResult<N>& r, const internal::NewtonSystem<N>& s,
-                  const Eigen::Matrix<double, N, 1>& lo, const Eigen::Matrix<double, N, 1>& hi) {
-  if (!r.converged || r.singular) return false;
-  for (int i = 0; i < N; ++i) {
-    if (r.active[static_cast<size_t>(i)] && !internal::HoldsAsMinimum<N>(r.x, s.grad, lo, hi, i))
-      return false;
-  }
-  return KindAt<N>(r, s, lo, hi) == ExtremumKind::kMinimum;
-}
-
-// A regular interior extremum of an interpenetrating pair: the penetration extremum.
-template <int N>
-bool IsPenetration(const internal::BoxNewtonResult<N>& r, const internal::NewtonSystem<N>& s) {
-  return r.converged && !r.singular && s.penetrating &&
-         std::none_of(r.active.begin(), r.active.end(), [](bool b) { return b; });
-}
-
-// What Seek::kMinimum accepts: a box minimum, or the penetration extremum.
-template <int N>
-bool Acceptable(const internal::BoxNewtonResult<N>& r, const internal::NewtonSystem<N>& s,
-                const Eigen::Matrix<double, N, 1>& lo, const Eigen::Matrix<double, N, 1>& hi) {
-  return IsBoxMinimum<N>(r, s, lo, hi) || IsPenetration<N>(r, s);
 }
 
 // NewtonSystem::touching for a surface pair at parameters x (limit normals at poles: a dome
@@ -229,89 +176,6 @@ bool Touching(const SurfacePairEval& e, double first_form_scale, const nurbs::Nu
   }
   if (dist <= internal::kTouchingDistance * size) return true;
   return FindPoleRow(f, x.head<2>()).found || FindPoleRow(g, x.tail<2>()).found;
-}
-
-// Newton from the seed; under Seek::kMinimum, when that does not end at an acceptable extremum,
-// the bound-constrained minimization from the same seed (restarted off a pole it stops on) and a
-// Newton polish on its active face (release by the multipliers' sign). `eval` must leave the
-// problem's own evaluation state at the last point it was called with: on return that is the
-// returned r.x. `pole(x, &y)` looks for a pole at or next to x: kEscape with y a seed just off
-// it along the best departure, kExtremum with y the pole pair (the other parameters solved for
-// the pole point) when the pole itself is the minimum, kNone otherwise.
-template <int N, class Eval, class Pole>
-internal::BoxNewtonResult<N> SolveOnBox(Eval&& eval, Pole&& pole,
-                                        const Eigen::Matrix<double, N, 1>& seed,
-                                        const Eigen::Matrix<double, N, 1>& lo,
-                                        const Eigen::Matrix<double, N, 1>& hi,
-                                        const internal::BoxNewtonOptions<N>& opt, Seek seek,
-                                        internal::NewtonSystem<N>* at_x) {
-  using Vec = Eigen::Matrix<double, N, 1>;
-  internal::NewtonSystem<N> last;
-  double seed_value = -1.0;  // ½|d|² at the (clamped) seed: BoxNewton's first evaluation
-  auto recorded = [&](const Vec& x, internal::NewtonSystem<N>* s) {
-    eval(x, s);
-    last = *s;
-    if (seed_value < 0.0) seed_value = s->value;
-  };
-  internal::BoxNewtonResult<N> first = internal::BoxNewton<N>(recorded, seed, lo, hi, opt);
-  int iterations = first.iterations;
-  // The pole pair as the answer: converged, nothing held (a pole is not an edge).
-  auto at_pole = [&](const Vec& y) {
-    internal::BoxNewtonResult<N> r;
-    r.x = y;
-    r.converged = true;
-    r.iterations = iterations;
-    r.rcond = 0.0;
-    eval(y, at_x);
-    return r;
-  };
-  Vec y;
-  // A touching pair (NewtonSystem::touching) is the minimum; on a pole row, the pole pair.
-  auto touching = [&](internal::BoxNewtonResult<N> r) {
-    if (pole(r.x, &y) == PoleAction::kExtremum) return at_pole(y);
-    r.iterations = iterations;
-    *at_x = last;
-    return r;
-  };
-  // A minimum farther apart than the seed's own pair lies in another basin: Newton on F is not
-  // a descent method and can cross to it. (A penetration extremum may be deeper than the seed.)
-  const bool uphill = last.value > seed_value * (1.0 + 1e-12) + 1e-300;
-  if (first.converged && last.touching) return touching(first);
-  if (seek == Seek::kNearest || (IsBoxMinimum<N>(first, last, lo, hi) && !uphill) ||
-      IsPenetration<N>(first, last)) {
-    *at_x = last;
-    return first;
-  }
-  internal::BoxNewtonResult<N> m = internal::BoxMinimize<N>(recorded, seed, lo, hi, opt);
-  iterations += m.iterations;
-  if (m.converged && last.touching) return touching(m);
-  for (int escapes = 0; escapes < 3; ++escapes) {
-    const PoleAction action = pole(m.x, &y);
-    if (action == PoleAction::kExtremum) return at_pole(y);
-    if (action == PoleAction::kNone) break;
-    m = internal::BoxMinimize<N>(recorded, y, lo, hi, opt);
-    iterations += m.iterations;
-  }
-  internal::BoxNewtonOptions<N> polish = opt;
-  polish.initial_active = m.active;
-  polish.release_by_gradient = true;
-  internal::BoxNewtonResult<N> second = internal::BoxNewton<N>(recorded, m.x, lo, hi, polish);
-  iterations += second.iterations;
-  if (Acceptable<N>(second, last, lo, hi)) {
-    second.iterations = iterations;
-    *at_x = last;
-    return second;
-  }
-  // Newton near a pole slows to linear and stops singular: the pole itself may be the answer.
-  for (const Vec* x : {&second.x, &m.x}) {
-    if (pole(*x, &y) == PoleAction::kExtremum) return at_pole(y);
-  }
-  // Neither is a minimum: keep Newton's answer and its honest flags.
-  internal::NewtonSystem<N> again;
-  eval(first.x, &again);
-  *at_x = again;
-  first.iterations = iterations;
-  return first;
 }
 
 }  // namespace
@@ -420,13 +284,14 @@ void NearestInNeighbourhood(Eval& eval, Pole& pole, const nurbs::NurbsSurface& f
                             const internal::BoxNewtonOptions<4>& opt,
                             const ExtremalOptions& options, internal::BoxNewtonResult<4>* r,
                             internal::NewtonSystem<4>* sys, SurfacePairEval* e) {
-  const bool answered = IsBoxMinimum<4>(*r, *sys, lo, hi);
-  double nearest = answered ? std::sqrt(2.0 * sys->value) : std::numeric_limits<double>::infinity();
-  int iterations = r->iterations;
   internal::NeighbourhoodStarts starts;
   internal::FindNeighbourhoodStarts(f, pose_f, g, pose_g,
                                     internal::ClampOrWrap<4>(seed, lo, hi, opt.periodic),
                                     options.neighbourhood, &starts);
+  if (starts.n == 0) return;
+  const bool answered = IsBoxMinimum<4>(*r, *sys, lo, hi);
+  double nearest = answered ? std::sqrt(2.0 * sys->value) : std::numeric_limits<double>::infinity();
+  int iterations = r->iterations;
   internal::BoxNewtonResult<4> best = *r;
   internal::NewtonSystem<4> best_sys = *sys;
   SurfacePairEval best_e = *e;
@@ -486,7 +351,7 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   Eigen::Vector4d lo, hi;
   lo << Lo(f), Lo(g);
   hi << Hi(f), Hi(g);
-  auto opt = Convert<4>(options);
+  auto opt = BoxOptionsOf<4>(options);
   opt.periodic = {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()};
   auto pole = [&](const Eigen::Vector4d& x, Eigen::Vector4d* y) {
     for (int side = 0; side < 2; ++side) {
@@ -512,18 +377,14 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
       const bool touching = d.norm() <= internal::kTouchingDistance * (P.norm() + q.p_f.norm());
       if (!touching &&
           BestDeparture(s, ps, row, d, side == 0 ? 1.0 : -1.0, &angle) < -1e-9 * d.norm()) {
-        const int i = 2 * side + row.across;
-        (*y)[2 * side + 1 - row.across] = angle;
-        (*y)[i] = row.bound + row.inward * 1e-3 * (hi[i] - lo[i]);
+        y->segment<2>(2 * side) = internal::OffPole(s, row, angle);
         return PoleAction::kEscape;
       }
       // No first-order descent: the pole is the minimum, or a maximum or saddle of the
       // distance, left along the departure that lowers it to second order.
       if (!PoleIsMinimum(s, ps, row, q.p_f, &angle)) {
         if (touching) return PoleAction::kNone;
-        const int i = 2 * side + row.across;
-        (*y)[2 * side + 1 - row.across] = angle;
-        (*y)[i] = row.bound + row.inward * 1e-3 * (hi[i] - lo[i]);
+        y->segment<2>(2 * side) = internal::OffPole(s, row, angle);
         return PoleAction::kEscape;
       }
       return q.kind == ExtremumKind::kMinimum ? PoleAction::kExtremum : PoleAction::kNone;
@@ -534,8 +395,7 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
   auto r = SolveOnBox<4>(eval, pole, seed, lo, hi, opt, options.seek, &sys);
   // e is the pair at r.x (SolveOnBox's contract).
   if (options.seek == Seek::kMinimum && options.neighbourhood > 0.0 && !sys.touching &&
-      !IsPenetration<4>(r, sys) &&
-      internal::NeighbourhoodReachesBoundary(f, g, seed, options.neighbourhood)) {
+      !IsPenetration<4>(r, sys)) {
     NearestInNeighbourhood(eval, pole, f, pose_f, g, pose_g, seed, lo, hi, opt, options, &r, &sys,
                            &e);
   }
@@ -646,7 +506,7 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
     s->classify_scale = s->scale;
     s->penetrating = false;  // a point's nearest surface point is a minimum on either side
   };
-  auto opt = Convert<2>(options);
+  auto opt = BoxOptionsOf<2>(options);
   opt.periodic = {f.periodic_u(), f.periodic_v()};
   auto pole = [&](const Eigen::Vector2d& x, Eigen::Vector2d* y) {
     const PoleRow row = FindPoleRow(f, x);
@@ -656,17 +516,13 @@ PointSurfaceExtremum SolvePointSurface(const Eigen::Vector3d& x_W, const nurbs::
     const Eigen::Vector3d d = pose_f.Point(f.Evaluate((*y)[0], (*y)[1], 0).S) - x_W;
     double angle = 0.0;
     if (BestDeparture(f, pose_f, row, d, 1.0, &angle) < -1e-9 * d.norm()) {
-      const int i = row.across;
-      (*y)[1 - i] = angle;
-      (*y)[i] = row.bound + row.inward * 1e-3 * (Hi(f)[i] - Lo(f)[i]);
+      *y = internal::OffPole(f, row, angle);
       return PoleAction::kEscape;
     }
     // No first-order descent: the pole is the minimum, or a maximum or saddle of the distance,
     // left along the departure that lowers it to second order.
     if (PoleIsMinimum(f, pose_f, row, x_W, &angle)) return PoleAction::kExtremum;
-    const int i = row.across;
-    (*y)[1 - i] = angle;
-    (*y)[i] = row.bound + row.inward * 1e-3 * (Hi(f)[i] - Lo(f)[i]);
+    *y = internal::OffPole(f, row, angle);
     return PoleAction::kEscape;
   };
   internal::NewtonSystem<2> s;
@@ -744,7 +600,7 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
   Eigen::Vector3d lo, hi;
   lo << Lo(f), g.domain_begin();
   hi << Hi(f), g.domain_end();
-  auto opt = Convert<3>(options);
+  auto opt = BoxOptionsOf<3>(options);
   opt.periodic = {f.periodic_u(), f.periodic_v(), g.periodic()};
   internal::NewtonSystem<3> sys;
   // Poles of f against a curve are not handled yet (the pair and point solvers handle them).

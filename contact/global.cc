@@ -58,8 +58,8 @@ struct Watched {
   // manager sees.
   Eigen::Vector3d centre = Eigen::Vector3d::Zero(), half = Eigen::Vector3d::Zero();
   std::unique_ptr<fcl::CollisionObjectd> object;
-  std::vector<WorldBox> placed;  // chunks' world boxes (filled on demand)
-  std::vector<int> placed_at;    // the pass each chunk's world box was placed in
+  std::vector<WorldBox> placed;  // chunks' world boxes (placed on demand, once a pass)
+  std::vector<int> placed_at;    // the pass each chunk's world box was placed in (-1: none)
   double L_u = 1.0, L_v = 1.0;   // mean |S_u|, |S_v|: metres per parameter unit
   double w_u = 1.0, w_v = 1.0;   // domain widths
   bool periodic_u = false, periodic_v = false;
@@ -249,6 +249,8 @@ Watched WatchSurface(int index, const GlobalSurface& s, const GlobalOptions& opt
   w.s = s;
   if (s.trim) w.edges = std::make_unique<TrimEdges>(s.surface, s.trim);
   w.chunks = BuildChunks(*s.mesh, options.chunk_u_cells, options.chunk_v_cells);
+  w.placed.resize(w.chunks.size());
+  w.placed_at.assign(w.chunks.size(), -1);
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
   for (const Eigen::Vector3d& x : s.mesh->vertices) {
     lo = lo.cwiseMin(x);
@@ -438,10 +440,6 @@ void GlobalContactStage::BroadPhase(const std::vector<BodyPose>& poses, GlobalSt
   auto near = [&](Watched& w, const BodyPose& p, const WorldBox& other, std::vector<int>* out) {
     const Eigen::Vector3d c = p.R_WB.transpose() * (0.5 * (other.lo + other.hi) - p.q.head<3>());
     const Eigen::Vector3d h = p.R_WB.transpose().cwiseAbs() * (0.5 * (other.hi - other.lo));
-    if (w.placed.size() != w.chunks.size()) {
-      w.placed.resize(w.chunks.size());
-      w.placed_at.assign(w.chunks.size(), -1);
-    }
     for (size_t k = 0; k < w.chunks.size(); ++k) {
       const Chunk& ch = w.chunks[k];
       if (((ch.centre - c).cwiseAbs().array() > (ch.half + h).array()).any()) continue;

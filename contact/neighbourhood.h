@@ -27,16 +27,13 @@ struct NeighbourhoodStarts {
   int n = 0;
 };
 
-/// Whether the neighbourhood of `seed` (±radius of each domain width, periodic directions
-/// excepted) reaches a domain edge of f or g: only then is there a boundary to search.
-bool NeighbourhoodReachesBoundary(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
-                                  const Eigen::Vector4d& seed, double radius);
-
 /// The starts of the neighbourhood of `seed`: each surface's window (the domain within ±radius
 /// of each width around the seed's parameters) sampled on a (kWindowSamples+1)² grid; for each
 /// domain edge the window reaches, the closest pair of its samples on that edge against the
-/// other surface's window. Only boundary candidates: a nearer interior minimum beside the seed
-/// is another basin's, which a cold seed's caller did not ask for. Allocation free.
+/// other surface's window; none (and nothing sampled) when the windows reach no domain edge
+/// (periodic seams and pole rows are not edges). Only boundary candidates: a nearer interior
+/// minimum beside the seed is another basin's, which a cold seed's caller did not ask for.
+/// Allocation free.
 void FindNeighbourhoodStarts(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                              const nurbs::NurbsSurface& g, const BodyPose& pose_g,
                              const Eigen::Vector4d& seed, double radius, NeighbourhoodStarts* out);

@@ -28,14 +28,27 @@ PoleRow FindPoleRow(const nurbs::NurbsSurface& s, const Eigen::Vector2d& uv) {
     } else {
       continue;
     }
-    Eigen::Vector2d at = uv;
-    at[across] = row.bound;
-    const nurbs::SurfacePoint p = s.Evaluate(at[0], at[1], 1);
-    const Eigen::Vector3d& along = across == 1 ? p.S_u : p.S_v;
-    const Eigen::Vector3d& off = across == 1 ? p.S_v : p.S_u;
-    if (off.norm() > 0.0 && along.norm() <= nurbs::kDegenerateRatio * off.norm()) return row;
+    if (IsPoleRowAt(s, across, row.bound, uv)) return row;
   }
   return {};
+}
+
+bool IsPoleRowAt(const nurbs::NurbsSurface& s, int across, double bound,
+                 const Eigen::Vector2d& uv) {
+  Eigen::Vector2d at = uv;
+  at[across] = bound;
+  const nurbs::SurfacePoint p = s.Evaluate(at[0], at[1], 1);
+  const Eigen::Vector3d& along = across == 1 ? p.S_u : p.S_v;
+  const Eigen::Vector3d& off = across == 1 ? p.S_v : p.S_u;
+  return off.norm() > 0.0 && along.norm() <= nurbs::kDegenerateRatio * off.norm();
+}
+
+Eigen::Vector2d OffPole(const nurbs::NurbsSurface& s, const PoleRow& row, double angle) {
+  const nurbs::KnotVector& k = row.across == 1 ? s.knots_v() : s.knots_u();
+  Eigen::Vector2d uv;
+  uv[1 - row.across] = angle;
+  uv[row.across] = row.bound + row.inward * 1e-3 * (k.domain_end() - k.domain_begin());
+  return uv;
 }
 
 double BestDeparture(const nurbs::NurbsSurface& s, const BodyPose& pose, const PoleRow& row,

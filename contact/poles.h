@@ -31,6 +31,15 @@ struct PoleRow {
 };
 PoleRow FindPoleRow(const nurbs::NurbsSurface& s, const Eigen::Vector2d& uv);
 
+/// Whether the domain edge where parameter `across` is held at `bound` collapses to a point
+/// there, measured at uv's other parameter: the derivative along the row vanishes
+/// (|along| ≤ kDegenerateRatio |across|).
+bool IsPoleRowAt(const nurbs::NurbsSurface& s, int across, double bound, const Eigen::Vector2d& uv);
+
+/// A seed just off the pole row (1e-3 of the across parameter's domain width inward), leaving
+/// it at angle parameter `angle`: where a minimization restarts from a pole.
+Eigen::Vector2d OffPole(const nurbs::NurbsSurface& s, const PoleRow& row, double angle);
+
 /// The departure from the pole row of a placed surface that most decreases ½|d|², where moving
 /// the surface's point by δp changes d by sign·δp: its slope per unit length (< 0: a descent),
 /// and the angle parameter it leaves at.
