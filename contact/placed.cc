@@ -42,10 +42,18 @@ void EvaluatePlaced(const nurbs::NurbsSurface& surface, const BodyPose& pose, do
 }
 
 double BodyCurve::domain_begin() const {
-  return space_ ? space_->knots().domain_begin() : domain_->knots().domain_begin();
+  if (space_) return space_->knots().domain_begin();
+  if (iso_fixed_ >= 0) {
+    return (iso_fixed_ == 0 ? surface_->knots_v() : surface_->knots_u()).domain_begin();
+  }
+  return domain_->knots().domain_begin();
 }
 double BodyCurve::domain_end() const {
-  return space_ ? space_->knots().domain_end() : domain_->knots().domain_end();
+  if (space_) return space_->knots().domain_end();
+  if (iso_fixed_ >= 0) {
+    return (iso_fixed_ == 0 ? surface_->knots_v() : surface_->knots_u()).domain_end();
+  }
+  return domain_->knots().domain_end();
 }
 
 nurbs::CurvePoint<3> BodyCurve::Evaluate(double tau, int* span_hint,
@@ -55,9 +63,23 @@ nurbs::CurvePoint<3> BodyCurve::Evaluate(double tau, int* span_hint,
     space_->Evaluate(tau, 2, span_hint, &out);
     return out;
   }
+  nurbs::SurfacePoint s;
+  if (iso_fixed_ == 0) {  // S(value, τ): the line along v
+    surface_->Evaluate<2>(iso_value_, tau, surface_hint, &s);
+    out.C = s.S;
+    out.C1 = s.S_v;
+    out.C2 = s.S_vv;
+    return out;
+  }
+  if (iso_fixed_ == 1) {  // S(τ, value): the line along u
+    surface_->Evaluate<2>(tau, iso_value_, surface_hint, &s);
+    out.C = s.S;
+    out.C1 = s.S_u;
+    out.C2 = s.S_uu;
+    return out;
+  }
   nurbs::CurvePoint<2> c;
   domain_->Evaluate(tau, 2, span_hint, &c);
-  nurbs::SurfacePoint s;
   surface_->Evaluate<2>(c.C.x(), c.C.y(), surface_hint, &s);
   const double a = c.C1.x(), b = c.C1.y();
   out.C = s.S;

@@ -49,6 +49,19 @@ class BodyCurve {
   BodyCurve(const nurbs::NurbsSurface* surface, const nurbs::NurbsCurve2d* domain_curve,
             bool periodic = false)
       : surface_(surface), domain_(domain_curve), periodic_(periodic) {}
+  /// A parameter line of a surface, g(τ) = S(value, τ) when `fixed` is 0 (u held: the line runs
+  /// along v) or S(τ, value) when 1 (v held). Periodic when the surface is in the running
+  /// parameter. Allocation free: a line contact's section (docs/contact.md, "Line contacts").
+  static BodyCurve Isoline(const nurbs::NurbsSurface* surface, int fixed, double value) {
+    BodyCurve c(surface, nullptr,
+                fixed == 0 ? surface->periodic_v() : surface->periodic_u());
+    c.iso_fixed_ = fixed;
+    c.iso_value_ = value;
+    return c;
+  }
+  /// For an isoline: which parameter is held (0 u, 1 v; −1 not an isoline) and its value.
+  int iso_fixed() const { return iso_fixed_; }
+  double iso_value() const { return iso_value_; }
   double domain_begin() const;
   double domain_end() const;
   bool periodic() const { return periodic_; }
@@ -60,6 +73,8 @@ class BodyCurve {
   const nurbs::NurbsSurface* surface_ = nullptr;
   const nurbs::NurbsCurve2d* domain_ = nullptr;
   bool periodic_ = false;
+  int iso_fixed_ = -1;
+  double iso_value_ = 0.0;
 };
 
 /// A curve point on a body, body and world.

@@ -2,6 +2,7 @@
 
 #include "contact/contact_jacobian.h"
 #include "nurbs/refinement.h"
+#include "optimizer/curve_rows.h"
 
 namespace tangent::optimizer {
 
@@ -183,16 +184,11 @@ void TrimmedContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
                                   &hint_f, &st->edge_eval);
     // β = (E − G)·n along g's normal at an interior extremum of g, along the line between the
     // points where the extremum is held on a bound (g's border, a joint of the loop).
-    const contact::CurveSurfaceExtremum& x = st->edge.ext;
-    const bool bound = x.at_bound[0] || x.at_bound[1] || x.at_bound[2];
-    const Eigen::Vector3d d = m.p_f - m.p_g;  // E − G
     st->reported.beta = m.beta;
     st->reported.p_f = m.p_f;
     st->reported.p_g = m.p_g;
     st->reported.status = m.status;
-    st->reported.direction = bound && d.norm() > 0.0
-                                 ? Eigen::Vector3d((m.beta < 0.0 ? -1.0 : 1.0) * d.normalized())
-                                 : Eigen::Vector3d(x.R_WCf.col(2));
+    st->reported.direction = internal::CurveRowDirection(st->edge.ext);
   }
   st->switches += st->valid && was_on_edge != st->on_edge;
   st->tracked_steps = face.tracked_steps;
@@ -221,10 +217,8 @@ void TrimmedContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
   }
   const BodyPose& pa = PoseOf(poses, body_a_);
   const BodyPose& pb = PoseOf(poses, body_b_);
-  const Eigen::Vector3d& n = st->reported.direction;
   r[0] = st->reported.beta;
-  J_a = n.transpose() * contact::PointJacobian(pa, st->edge_eval.g.body.C);
-  J_b = -n.transpose() * contact::PointJacobian(pb, st->edge_eval.f.body.S);
+  internal::CurveRowJacobian(st->edge_eval, st->reported.direction, pa, pb, J_a, J_b);
 }
 
 void TrimmedContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
@@ -237,40 +231,9 @@ void TrimmedContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
     face_.AddWeightedHessian(poses, st->face_state.get(), w, h);
     return;
   }
-  // The edge: β = (E − G)·n, n = g's unit normal at G, E = f(c(τ)) on body a, G = g(s, t) on
-  // body b, at their curve–surface extremum. As for the face contact (contacts.h):
-  //   ∇²β = Pᵀ n_q + n·∂²(E − G)/∂q² + V_Eᵀ τ_q − V_Gᵀ (s, t)_q,
-  // P = ∂(E − G)/∂q at fixed parameters, n_q the normal's total derivative (body b's rotation
-  // and (s, t)), V the normal component of P's change with the parameters, (s, t, τ)_q the
-  // curve–surface contact Jacobian. Held on a bound (g's border, a joint of the loop), the
-  // solver's Gauss–Newton model is used instead.
-  const contact::CurveSurfaceExtremum& x = st->edge.ext;
-  if (x.at_bound[0] || x.at_bound[1] || x.at_bound[2]) return;
-  const BodyPose& pa = PoseOf(poses, body_a_);
-  const BodyPose& pb = PoseOf(poses, body_b_);
-  const contact::CurveSurfaceEval& e = st->edge_eval;  // its f: g on body b; its g: the edge
-  contact::Matrix3x14 solver_q;  // (s, t, τ) over (q_b, q_a), the solver's order
-  if (!contact::CurveSurfaceJacobianImplicit(e, pb, pa, &solver_q)) solver_q.setZero();
-  contact::Matrix3x14 x_q;  // over (q_a, q_b)
-  x_q << solver_q.rightCols<7>(), solver_q.leftCols<7>();
-  const Eigen::Vector3d& n = st->reported.direction;
-  Eigen::Matrix<double, 3, 14> P;
-  P << contact::PointJacobian(pa, e.g.body.C), -contact::PointJacobian(pb, e.f.body.S);
-  Eigen::Matrix<double, 3, 14> n_q = Eigen::Matrix<double, 3, 14>::Zero();
-  n_q.rightCols<7>() = contact::DirectionJacobian(pb, pb.R_WB.transpose() * n);
-  n_q += internal::UnitNormalPartial(e.f.N_W, e.f.N_W_u) * x_q.row(0) +
-         internal::UnitNormalPartial(e.f.N_W, e.f.N_W_v) * x_q.row(1);
-  Eigen::Matrix<double, 14, 14> H = P.transpose().lazyProduct(n_q);  // (as contacts.cc)
-  Eigen::Matrix<double, 1, 14> V_E = Eigen::Matrix<double, 1, 14>::Zero();
-  Eigen::Matrix<double, 2, 14> V_G = Eigen::Matrix<double, 2, 14>::Zero();
-  V_E.leftCols<7>() = n.transpose() * contact::DirectionJacobian(pa, e.g.body.C1);
-  V_G.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(pb, e.f.body.S_u);
-  V_G.block<1, 7>(1, 7) = n.transpose() * contact::DirectionJacobian(pb, e.f.body.S_v);
-  H.noalias() += V_E.transpose().lazyProduct(x_q.row(2));
-  H.noalias() -= V_G.transpose().lazyProduct(x_q.topRows<2>());
-  internal::Split(H, w[0], h);
-  h->W_a.noalias() += (w[0] * n) * e.g.body.C.transpose();
-  h->W_b.noalias() -= (w[0] * n) * e.f.body.S.transpose();
+  // The edge: the curve row's Hessian (curve_rows.h) with E = f(c(τ)).
+  internal::AddCurveRowHessian(st->edge_eval, st->edge.ext, st->reported.direction,
+                               PoseOf(poses, body_a_), PoseOf(poses, body_b_), w[0], h);
 }
 
 std::shared_ptr<TrimConstraintTerm> MakeTrimConstraint(TrimForm form, int body_a,
