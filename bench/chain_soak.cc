@@ -6,6 +6,7 @@
 //
 //   ./build/bench/chain_soak [--seconds 150] [--from 0]   (print seconds from)
 //                            [--trace-from T --trace-to T]  (every device step's contacts)
+//                            [--lines] [--reach]  (ServoOptions::line_contacts, step_reach)
 
 #include <cmath>
 #include <cstdio>
@@ -24,14 +25,19 @@ using namespace tangent::server;
 
 int main(int argc, char** argv) {
   double seconds = 150.0, from = 0.0, trace_from = 1e9, trace_to = -1.0;
-  for (int i = 1; i + 1 < argc; i += 2) {
+  for (int i = 1; i + 1 < argc; ++i) {
     if (!std::strcmp(argv[i], "--trace-from")) trace_from = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--trace-to")) trace_to = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--from")) from = std::atof(argv[i + 1]);
   }
   const auto scene = LoadScene(std::string(TANGENT_SCENES_DIR) + "/paperclips.json");
-  ServoLoop servo(*scene, ServoOptions{});
+  ServoOptions options;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
+    if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
+  }
+  ServoLoop servo(*scene, options);
   GlobalLink link(servo);
   HandTrajectory hand = HandTrajectory::BuiltIn("drag");
   hand.LoopFrom(3.0);
@@ -83,6 +89,14 @@ int main(int argc, char** argv) {
         std::printf(" [%d-%d b %.2e u %.4f %.4f %.4f %.4f f %.3f]", x.surface_a, x.surface_b,
                     x.beta, x.u[0], x.u[1], x.u[2], x.u[3], x.force);
       }
+      for (int p = 0; p < servo.lines().pairs(); ++p) {
+        if (!servo.lines().line(p)) continue;
+        for (int side = 0; side < 2; ++side) {
+          const auto& x = servo.lines().section(p, side);
+          std::printf(" {line %d/%d b %.2e at %.4f u %.4f %.4f %.4f}", p, side, x.ext.beta, x.value,
+                      x.u[0], x.u[1], x.u[2]);
+        }
+      }
       std::printf("\n");
     }
     if (k % 4 == 3) {
@@ -103,9 +117,14 @@ int main(int argc, char** argv) {
     }
     if ((k + 1) % 1000 == 0) {
       if (t >= from) {
-        std::printf("%6.0f s  contacts %d (max %d)  mean |F| %.3f N  events %d  violation %.1e\n",
-                    t + dt, snap.num_contacts, contacts_max, f_sum / 1000.0, events,
-                    worst_violation);
+        int lines = 0;
+        for (int p = 0; p < servo.lines().pairs(); ++p) lines += servo.lines().line(p);
+        std::printf(
+            "%6.0f s  contacts %d (max %d)  lines %d (placed %lld)  mean |F| %.3f N  events %d  "
+            "violation %.1e\n",
+            t + dt, snap.num_contacts, contacts_max, lines,
+            static_cast<long long>(servo.lines().placements()), f_sum / 1000.0, events,
+            worst_violation);
       }
       f_sum = 0.0;
       events = 0;

@@ -137,6 +137,11 @@ void BodyContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, Ter
   h->W_b += inner.W_a;
 }
 
+bool BodyContactTerm::Reach(const TermState* state, Eigen::Vector3d* p, double* reach) const {
+  const auto* st = static_cast<const State*>(state);
+  return st->active && st->f >= 0 && st->inner_term().Reach(&st->inner(), p, reach);
+}
+
 std::shared_ptr<BodyContactTerm> MakeBodyContact(std::vector<ContactFace> faces_a,
                                                  std::vector<ContactFace> faces_b,
                                                  const ContactTracking& tracking) {

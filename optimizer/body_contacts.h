@@ -83,6 +83,8 @@ class BodyContactTerm final : public Term {
   void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override;
+  /// The inner term's (a point does not depend on the bodies' order).
+  bool Reach(const TermState* state, Eigen::Vector3d* p, double* reach) const override;
 
   /// The face with this id, or −1 (a linear scan: faces are few, events rare).
   int FaceIndex(int id) const;

@@ -6,6 +6,7 @@
 #include <Eigen/LU>
 
 #include "contact/contact_jacobian.h"
+#include "contact/relative_curvature.h"
 #include "contact/rigid.h"
 
 namespace tangent::optimizer {
@@ -108,6 +109,17 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   st->q_f = pf.q;
   st->q_g = pg.q;
   st->valid = true;
+}
+
+bool SurfaceContactTerm::Reach(const TermState* state, Eigen::Vector3d* p, double* reach) const {
+  const auto* st = static_cast<const State*>(state);
+  if (!st->active || !st->valid || st->ext.status != contact::ExtremalStatus::kConverged)
+    return false;
+  const contact::RelativeCurvature rc = contact::RelativeCurvatureOf(st->eval);
+  if (!rc.valid) return false;
+  *p = 0.5 * (st->ext.p_f + st->ext.p_g);
+  *reach = ContactReach(st->ext.beta, rc.eigenvalues[1]);
+  return std::isfinite(*reach);
 }
 
 void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState* state,

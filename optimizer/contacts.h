@@ -125,6 +125,8 @@ class SurfaceContactTerm final : public Term {
                           TermHessian* h) const override;
 
   std::unique_ptr<TermState> MakeState() const override;
+  /// Gap plus a quarter of the pair's relative radius of curvature, 1/λ_max (RelativeCurvatureOf).
+  bool Reach(const TermState* state, Eigen::Vector3d* p, double* reach) const override;
   /// The default ContactTracking::accept_residual.
   static constexpr double kTrackedResidual = 1e-12;
 

@@ -12,6 +12,18 @@ Eigen::Vector3d CurveRowDirection(const contact::CurveSurfaceExtremum& x) {
   return x.R_WCf.col(2);
 }
 
+bool CurveRowReach(const contact::CurveSurfaceEval& e, const contact::CurveSurfaceExtremum& x,
+                   Eigen::Vector3d* p, double* reach) {
+  if (x.status != contact::ExtremalStatus::kConverged) return false;
+  const Eigen::Vector3d& c1 = e.g.world.C1;
+  const double speed = c1.norm();
+  if (!(speed > 0.0)) return false;
+  const double kappa = c1.cross(e.g.world.C2).norm() / (speed * speed * speed);
+  *p = 0.5 * (x.p_f + x.p_g);
+  *reach = ContactReach(x.beta, kappa);
+  return std::isfinite(*reach);
+}
+
 void CurveRowJacobian(const contact::CurveSurfaceEval& e, const Eigen::Vector3d& n,
                       const contact::BodyPose& pa, const contact::BodyPose& pb,
                       Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) {

@@ -64,6 +64,11 @@ void SectionContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
                                PoseOf(poses, body_g_), w[0], h);
 }
 
+bool SectionContactTerm::Reach(const TermState* state, Eigen::Vector3d* p, double* reach) const {
+  const auto* st = static_cast<const State*>(state);
+  return st->active && st->valid && internal::CurveRowReach(st->eval, st->ext, p, reach);
+}
+
 std::shared_ptr<SectionContactTerm> MakeSectionContact(int body_f, const nurbs::NurbsSurface* f,
                                                        int body_g, const nurbs::NurbsSurface* g) {
   return std::make_shared<SectionContactTerm>(body_f, f, body_g, g);

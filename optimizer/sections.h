@@ -68,6 +68,7 @@ class SectionContactTerm final : public Term {
   void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override;
+  bool Reach(const TermState* state, Eigen::Vector3d* p, double* reach) const override;
   /// The section's extremum at `poses` (evaluates when they changed). Allocation free.
   void Update(const std::vector<BodyPose>& poses, State* st) const;
 

@@ -32,6 +32,13 @@ struct SolverOptions {
   /// unit quaternion) and |Δp| in metres (0: no limit). Warm servo steps stay far below.
   double max_rotation_step = 0.2;
   double max_translation_step = 0.0;
+  /// Step reach (docs/stability.md): a step is shortened so that no contact row's two bodies
+  /// move their copies of its contact point relative to each other by more than the row's reach
+  /// (Term::Reach: its gap plus a quarter of its relative radius of curvature), so that each
+  /// tracked extremum is continued along the step and a step cannot carry one surface through
+  /// another past the contact that holds them apart. Off by default: measured so far only on
+  /// the paperclip soak (docs/reliability.md), where it does not yet hold the chain on its own.
+  bool step_reach = false;
   /// Newton steps per iteration while the inequalities' active set changes (its guess from the
   /// multipliers, then its corrections from the linearized constraints after the step).
   int max_active_set_passes = 4;
@@ -143,6 +150,8 @@ class Solver {
   double Violation() const;
   double Complementarity() const;
   void Normalize(Eigen::VectorXd* q) const;
+  /// The largest fraction (≤ 1) of step_ from q within every contact row's reach.
+  double ReachFraction(const Eigen::VectorXd& q) const;
 
   /// Assembles and factorizes the Newton matrix for the current active set and solves for step_
   /// (damped until positive definite and within the trust region); @return the damping used.

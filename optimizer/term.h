@@ -1,5 +1,7 @@
 #pragma once
 
+#include <algorithm>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -82,7 +84,24 @@ class Term {
   virtual void AddWeightedHessian(const std::vector<BodyPose>& /*poses*/, TermState* /*state*/,
                                   const Eigen::Ref<const Eigen::VectorXd>& /*w*/,
                                   TermHessian* /*h*/) const {}
+
+  /// A contact row's reach (the solver's step bound, docs/stability.md "Step reach"), at the
+  /// state's last evaluation: the world point p where it measures and how far (m) one solver
+  /// step may move the two bodies' copies of p relative to each other, so that the row's
+  /// extremum is continued and not jumped over. false: no bound (not a contact, inactive, or
+  /// flat). Allocation free.
+  virtual bool Reach(const TermState* /*state*/, Eigen::Vector3d* /*p*/, double* /*reach*/) const {
+    return false;
+  }
 };
+
+/// The reach of a contact measured at distance β between two points whose relative radius of
+/// curvature is 1/κ (κ > 0): its gap, and a quarter of that radius (an extremum moves along the
+/// surfaces by about the relative motion times the radius over the gap's scale, so a step within
+/// a quarter radius keeps it in its basin). 0 < κ; else no bound (+inf).
+inline double ContactReach(double beta, double kappa) {
+  return kappa > 0.0 ? std::max(beta, 0.0) + 0.25 / kappa : std::numeric_limits<double>::infinity();
+}
 
 using TermPtr = std::shared_ptr<const Term>;
 

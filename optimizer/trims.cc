@@ -236,6 +236,13 @@ void TrimmedContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
                                PoseOf(poses, body_a_), PoseOf(poses, body_b_), w[0], h);
 }
 
+bool TrimmedContactTerm::Reach(const TermState* state, Eigen::Vector3d* p, double* reach) const {
+  const auto* st = static_cast<const State*>(state);
+  if (!st->active || !st->valid) return false;
+  if (!st->on_edge) return face_.Reach(st->face_state.get(), p, reach);
+  return internal::CurveRowReach(st->edge_eval, st->edge.ext, p, reach);
+}
+
 std::shared_ptr<TrimConstraintTerm> MakeTrimConstraint(TrimForm form, int body_a,
                                                        const nurbs::NurbsSurface* f,
                                                        const nurbs::NurbsCurve2d* curve, int body_b,

@@ -152,6 +152,8 @@ class TrimmedContactTerm final : public Term {
   void AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
                           const Eigen::Ref<const Eigen::VectorXd>& w,
                           TermHessian* h) const override;
+  /// The face contact's reach on the face, the edge row's on the edge.
+  bool Reach(const TermState* state, Eigen::Vector3d* p, double* reach) const override;
 
  private:
   void Update(const std::vector<BodyPose>& poses, State* st) const;

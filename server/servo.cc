@@ -62,7 +62,7 @@ optimizer::Mechanism ModelledMechanism(const Scene& scene) {
 }  // namespace
 
 ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
-    : scene_(&scene_in), options_(options) {
+    : scene_(&scene_in), options_(options), lines_(options.line) {
   const Scene* scene = scene_;
   if (options.dof != 3 && options.dof != 6) {
     throw SceneError("device: dof must be 3 or 6, got " + std::to_string(options.dof));
@@ -128,6 +128,9 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
       slots_.push_back({lo, hi, -1, true, false, term});
       continue;
     }
+    const int line = options.line_contacts && !f.trim && !g.trim
+                         ? lines_.AddPair(&p, f.body, &f.surface, g.body, &g.surface)
+                         : -1;
     for (int m = 0; m < pair.max_contacts; ++m) {
       // On a trimmed pair the contact measures only the material (the trimmed surface as the
       // term's f; with both trimmed, the first one's trim: docs/trimming.md).
@@ -144,6 +147,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
         slot.term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface, seed,
                                                   options.tracking);
       }
+      slot.line = line;
       const int index = p.AddInequality(slot.term);  // deactivated below, once solver_ has data
       slot.row = p.inequalities()[static_cast<size_t>(index)].row;
       slots_.push_back(std::move(slot));
@@ -199,6 +203,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   for (const ObjectiveSpec& o : scene->objectives) p.AddObjective(o.term, o.weight);
   optimizer::SolverOptions so;
   so.max_iterations = options.max_iterations;
+  so.step_reach = options.step_reach;
   so.kkt_tolerance = options.kkt_tolerance;
   solver_ = std::make_unique<optimizer::Solver>(p, so);
   // The per-solve data the tick changes: contact slots (free ones deactivated, then the cold
@@ -209,6 +214,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
       s.body_state = &solver_->data().StateAs<optimizer::BodyContactTerm::State>(*s.term);
     if (!s.floating) s.state->Deactivate();
   }
+  lines_.Bind(solver_.get());
   for (const auto& e : events) Apply(ToEventMsg(e));  // (a cold pass only adds)
   grasp_state_ = &solver_->data().Of(*grasp_);
   if (grasp_orientation_) grasp_orientation_state_ = &solver_->data().Of(*grasp_orientation_);
@@ -452,7 +458,20 @@ void ServoLoop::KeepGood() {
   orientation_target_good_ = orientation_target_;
 }
 
+void ServoLoop::FollowLines() {
+  for (int k = 0; k < lines_.pairs(); ++k) lines_.BeginPair(k);
+  for (const Slot& s : slots_) {
+    if (s.line < 0 || !s.state->active) continue;
+    const auto& st = static_cast<const optimizer::SurfaceContactTerm::State&>(*s.state);
+    if (st.valid && st.ext.status == contact::ExtremalStatus::kConverged) {
+      lines_.Consider(s.line, st.ext, st.eval);
+    }
+  }
+  for (int k = 0; k < lines_.pairs(); ++k) lines_.EndPair(k);
+}
+
 void ServoLoop::RestoreGood() {
+  lines_.Clear();
   q_ = q_good_;
   solver_->set_multipliers(lambda_e_good_, lambda_i_good_);
   for (Slot& s : slots_) {
@@ -597,6 +616,7 @@ bool ServoLoop::MoveScene(const DeviceSample* fresh_device, double dt, const Inj
     out->violation = good_violation_;
   } else {
     KeepGood();
+    FollowLines();
     good_violation_ = st.max_violation;
     out->violation = st.max_violation;
   }

@@ -16,6 +16,7 @@
 #include "optimizer/goals.h"
 #include "optimizer/problem.h"
 #include "optimizer/solver.h"
+#include "server/line_contacts.h"
 #include "server/messages.h"
 #include "server/scene.h"
 
@@ -45,6 +46,14 @@ struct ServoOptions {
   /// How contact slots follow their pairs between solves (defaults exact; bench/speed_error
   /// sweeps the alternatives, docs/benchmarks.md).
   optimizer::ContactTracking tracking;
+  /// Line contacts (server/line_contacts.h): a nearly conformal contact of a declared pair of
+  /// untrimmed surfaces is also held by two sections across its line. Off by default: on the
+  /// paperclip soak it keeps the chain hooked but, with step_reach, stalls in a 0.39 mm
+  /// penetration from 140 s (docs/reliability.md, "Soak"); bench/chain_soak --lines --reach.
+  bool line_contacts = false;
+  LineContactOptions line;
+  /// optimizer::SolverOptions::step_reach (off by default, as line_contacts).
+  bool step_reach = false;
 };
 
 /// Test hooks: a one-shot value injected into one stage of the next tick, to show that a
@@ -105,6 +114,8 @@ class ServoLoop {
   /// p_WG: the grasp point G on the grasped body in the world W (m).
   Eigen::Vector3d GraspPoint() const;
   int active_contacts() const;
+  /// The line contacts' sections (server/line_contacts.h).
+  const LineContacts& lines() const { return lines_; }
   const optimizer::Problem& problem() const { return *problem_; }
   /// The grasp goal's target (world, m): follows the tool point at the device's follow speed.
   Eigen::Vector3d GraspTarget() const;
@@ -136,6 +147,7 @@ class ServoLoop {
     const optimizer::BodyContactTerm* body_term = nullptr;
     optimizer::BodyContactTerm::State* body_state = nullptr;
     int good_a = -1, good_b = -1;  ///< the body slot's face pair at the last good tick (−1 free)
+    int line = -1;  ///< its pair's index in lines_ (a declared untrimmed unilateral pair), or −1
     /// Moves a body pair's slot to surfaces (a, b) (allocation free); false if not its faces.
     bool Target(int a, int b);
     /// The contact in the pair's order (a's parameters first; p_a on a).
@@ -191,6 +203,9 @@ class ServoLoop {
   optimizer::OrientationGoalTerm::State* grasp_orientation_state_ = nullptr;
   optimizer::Attachment grasp_at_;
   std::vector<Slot> slots_;
+  LineContacts lines_;
+  /// After a good tick: each line pair's sections placed, moved or taken away (lines_).
+  void FollowLines();
   Eigen::VectorXd q_;
   std::vector<contact::BodyPose> poses_;
   // Last good state (restored after a fault).
