@@ -53,8 +53,7 @@ class BodyCurve {
   /// along v) or S(τ, value) when 1 (v held). Periodic when the surface is in the running
   /// parameter. Allocation free: a line contact's section (docs/contact.md, "Line contacts").
   static BodyCurve Isoline(const nurbs::NurbsSurface* surface, int fixed, double value) {
-    BodyCurve c(surface, nullptr,
-                fixed == 0 ? surface->periodic_v() : surface->periodic_u());
+    BodyCurve c(surface, nullptr, fixed == 0 ? surface->periodic_v() : surface->periodic_u());
     c.iso_fixed_ = fixed;
     c.iso_value_ = value;
     return c;

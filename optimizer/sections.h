@@ -31,9 +31,9 @@ class SectionContactTerm final : public Term {
  public:
   struct State final : TermState {
     bool active = false;
-    int fixed = 0;         ///< f's parameter held on the line: 0 u, 1 v
-    double value = 0.0;    ///< its value
-    Eigen::Vector3d u;     ///< tracked (s, t, τ): g's parameters, then the line's
+    int fixed = 0;       ///< f's parameter held on the line: 0 u, 1 v
+    double value = 0.0;  ///< its value
+    Eigen::Vector3d u;   ///< tracked (s, t, τ): g's parameters, then the line's
     Vector7d q_a, q_b;
     bool valid = false;
     contact::CurveSurfaceExtremum ext;

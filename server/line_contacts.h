@@ -32,7 +32,8 @@ class LineContacts {
 
   /// Reserves a pair's two section rows in *p (f on body_f, g on body_g, untrimmed); returns the
   /// pair's index here. A pair with sections keeps them while it has no tracked contact (the
-  /// global stage re-seeding it), until both are farther apart than their half spacing. The surfaces must outlive this.
+  /// global stage re-seeding it), until both are farther apart than their half spacing. The
+  /// surfaces must outlive this.
   int AddPair(optimizer::Problem* p, int body_f, const nurbs::NurbsSurface* f, int body_g,
               const nurbs::NurbsSurface* g);
   /// Takes the sections' data in the solver (after it is made); all inactive.
@@ -42,7 +43,8 @@ class LineContacts {
   /// (the pair order (f, g) of AddPair), and whether any is in use. Places, moves or takes away
   /// the pair's sections.
   void BeginPair(int k);
-  void Consider(int k, const contact::SurfaceSurfaceExtremum& ext, const contact::SurfacePairEval& e);
+  void Consider(int k, const contact::SurfaceSurfaceExtremum& ext,
+                const contact::SurfacePairEval& e);
   void EndPair(int k);
   /// Takes every section away (a fault restored the last good state).
   void Clear();

@@ -37,12 +37,14 @@ Eigen::VectorXd Place(double gap, double tilt, double yaw, std::mt19937_64& rng)
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const Eigen::Quaterniond qa(1, 0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng));
   const Eigen::Vector3d pa(0.001 * u(rng), 0.001 * u(rng), 0.001 * u(rng));
-  const Eigen::Quaterniond turn = Eigen::Quaterniond(Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitX())) *
-                                  Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()));
+  const Eigen::Quaterniond turn =
+      Eigen::Quaterniond(Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitX())) *
+      Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()));
   const Eigen::Quaterniond qb = qa.normalized() * turn;
   // b's axis through (2.01 r + gap, 0, L/2) in a's frame, turned about that point.
   const Eigen::Vector3d mid(2.01 * kRadius + gap, 0, kLength / 2);
-  const Eigen::Vector3d pb = pa + qa.normalized() * (mid - turn * Eigen::Vector3d(0, 0, kLength / 2));
+  const Eigen::Vector3d pb =
+      pa + qa.normalized() * (mid - turn * Eigen::Vector3d(0, 0, kLength / 2));
   Eigen::VectorXd q(14);
   q << pa, 1.1 * qa.w(), 1.1 * qa.x(), 1.1 * qa.y(), 1.1 * qa.z(), pb, 0.9 * qb.w(), 0.9 * qb.x(),
       0.9 * qb.y(), 0.9 * qb.z();
@@ -118,14 +120,16 @@ TEST(SectionContactTest, GradientAndHessianAgainstDifferences) {
     ASSERT_EQ(sec.ext.status, contact::ExtremalStatus::kConverged) << "trial " << trial;
     ASSERT_EQ(sec.ext.kind, contact::ExtremumKind::kMinimum)
         << "trial " << trial << " u " << sec.ext.u.transpose() << " beta " << sec.ext.beta;
-    const Eigen::Matrix<double, 1, 14> fd = testing::ValueDifferences(s.mech, *term, st.get(), q, 1e-7);
-    worst_grad = std::max(worst_grad, (fd - grad).cwiseAbs().maxCoeff() / grad.cwiseAbs().maxCoeff());
+    const Eigen::Matrix<double, 1, 14> fd =
+        testing::ValueDifferences(s.mech, *term, st.get(), q, 1e-7);
+    worst_grad =
+        std::max(worst_grad, (fd - grad).cwiseAbs().maxCoeff() / grad.cwiseAbs().maxCoeff());
     const Eigen::Matrix<double, 14, 1> rows =
         testing::HessianRowErrors(s.mech, *term, st.get(), q, 1.7, 1e-6);
     worst_hess = std::max(worst_hess, rows.maxCoeff());
   }
-  std::printf("section row: gradient %.1e, Hessian rows %.1e (relative, worst of 12)\n",
-              worst_grad, worst_hess);
+  std::printf("section row: gradient %.1e, Hessian rows %.1e (relative, worst of 12)\n", worst_grad,
+              worst_hess);
   EXPECT_LT(worst_grad, 1e-6);
   EXPECT_LT(worst_hess, 1e-6);
 }

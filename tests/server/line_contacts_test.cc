@@ -1,7 +1,7 @@
 // The servo's line contacts (server/line_contacts.h): two cylinders nearly side by side (a line
-// contact: relative curvature nearly zero along the axes) get two sections either side of the contact, each
-// measuring the same gap; two crossing at right angles (a point contact) get none; the choice has
-// hysteresis; and following a contact allocates nothing.
+// contact: relative curvature nearly zero along the axes) get two sections either side of the
+// contact, each measuring the same gap; two crossing at right angles (a point contact) get none;
+// the choice has hysteresis; and following a contact allocates nothing.
 
 #include "server/line_contacts.h"
 
@@ -137,9 +137,9 @@ TEST(LineContactsTest, FollowingAllocatesNothing) {
   Cylinders c(0.01);
   contact::SurfacePairEval e;
   c.Follow(&e);
-  const contact::SurfaceSurfaceExtremum x = contact::SolveSurfaceSurface(
-      c.a, c.poses[0], c.b, c.poses[1], Eigen::Vector4d(0.0, 0.5, 0.5, 0.5), contact::kContinuation,
-      &e);
+  const contact::SurfaceSurfaceExtremum x =
+      contact::SolveSurfaceSurface(c.a, c.poses[0], c.b, c.poses[1],
+                                   Eigen::Vector4d(0.0, 0.5, 0.5, 0.5), contact::kContinuation, &e);
   const long before = testing::AllocationCount();
   for (int k = 0; k < 100; ++k) {
     c.lines.BeginPair(0);
