@@ -36,6 +36,10 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
     if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
+    if (!std::strcmp(argv[i], "--enter") && i + 1 < argc)
+      options.line.enter = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--leave") && i + 1 < argc)
+      options.line.leave = std::atof(argv[i + 1]);
   }
   ServoLoop servo(*scene, options);
   GlobalLink link(servo);
@@ -91,7 +95,7 @@ int main(int argc, char** argv) {
       }
       for (int p = 0; p < servo.lines().pairs(); ++p) {
         if (!servo.lines().line(p)) continue;
-        for (int side = 0; side < 2; ++side) {
+        for (int side = 0; side < tangent::server::LineContacts::kSections; ++side) {
           const auto& x = servo.lines().section(p, side);
           std::printf(" {line %d/%d b %.2e at %.4f u %.4f %.4f %.4f}", p, side, x.ext.beta, x.value,
                       x.u[0], x.u[1], x.u[2]);
@@ -120,11 +124,11 @@ int main(int argc, char** argv) {
         int lines = 0;
         for (int p = 0; p < servo.lines().pairs(); ++p) lines += servo.lines().line(p);
         std::printf(
-            "%6.0f s  contacts %d (max %d)  lines %d (placed %lld)  mean |F| %.3f N  events %d  "
-            "violation %.1e\n",
+            "%6.0f s  contacts %d (max %d)  lines %d (placed %lld, moved %lld)  mean |F| %.3f N  "
+            "events %d  violation %.1e\n",
             t + dt, snap.num_contacts, contacts_max, lines,
-            static_cast<long long>(servo.lines().placements()), f_sum / 1000.0, events,
-            worst_violation);
+            static_cast<long long>(servo.lines().placements()),
+            static_cast<long long>(servo.lines().moves()), f_sum / 1000.0, events, worst_violation);
       }
       f_sum = 0.0;
       events = 0;

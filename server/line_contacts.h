@@ -1,13 +1,17 @@
 #pragma once
 
-// Line contacts in the servo (docs/contact.md, "Line contacts"): where a declared pair's tracked
+// Line contacts in the servo (docs/contact.md, "Line contacts"). Where a declared pair's tracked
 // contact is nearly conformal along one direction (its relative curvature's smaller eigenvalue
-// small against the larger), the pair is also held by two sections across that direction, one
-// either side of the contact (optimizer::SectionContactTerm), so that it stays held when the
-// contact's own extremum turns into a saddle with a minimum either side (a pitchfork). The
-// sections are placed with hysteresis and moved when the contact slides past the middle half
-// between them; a crossing contact costs nothing beyond one relative-curvature evaluation per
-// tick. Allocation free after construction.
+// small against the larger), its extremal point is nearly degenerate: its place along the line
+// is ill-conditioned, its exact Hessian grows like the inverse of that eigenvalue, and past a
+// pitchfork it is a saddle with a minimum either side. Its distance is well conditioned all the
+// same. So while the contact is line-like the pair is held instead by three sections across the
+// line (optimizer::SectionContactTerm): one through the contact, one either side. Each is a
+// regular curve–surface extremum, each an exact constraint (its points are the surface's), and a
+// section off the line's true minimum by δ along it reads the distance high by only ½ λ_min δ².
+// After each good tick the sections follow the line (the three move by half their spacing
+// toward a side that is nearer), and the point contact comes back, at the middle section, when
+// the relative curvature there passes `leave`. Allocation free after construction.
 
 #include <vector>
 
@@ -19,61 +23,70 @@
 namespace tangent::server {
 
 struct LineContactOptions {
-  /// Sections placed when λ_min < enter · λ_max (λ the relative curvature's eigenvalues,
-  /// contact::RelativeCurvatureOf; λ_min < 0 past the pitchfork), taken away when
-  /// λ_min > leave · λ_max on every contact of the pair.
+  /// Line mode entered when λ_min < enter · λ_max at a tracked contact (λ the relative
+  /// curvature's eigenvalues, contact::RelativeCurvatureOf; λ_min < 0 past the pitchfork), left
+  /// when λ_min > leave · λ_max at the middle section.
   double enter = 0.1;
   double leave = 0.25;
 };
 
 class LineContacts {
  public:
+  static constexpr int kSections = 3;  ///< middle, then one either side
+
   explicit LineContacts(const LineContactOptions& options = {}) : options_(options) {}
 
-  /// Reserves a pair's two section rows in *p (f on body_f, g on body_g, untrimmed); returns the
-  /// pair's index here. A pair with sections keeps them while it has no tracked contact (the
-  /// global stage re-seeding it), until both are farther apart than their half spacing. The
-  /// surfaces must outlive this.
+  /// Reserves a pair's section rows in *p (f on body_f, g on body_g, untrimmed); returns the
+  /// pair's index here. The surfaces must outlive this.
   int AddPair(optimizer::Problem* p, int body_f, const nurbs::NurbsSurface* f, int body_g,
               const nurbs::NurbsSurface* g);
   /// Takes the sections' data in the solver (after it is made); all inactive.
   void Bind(optimizer::Solver* solver);
 
-  /// After a good tick: pair k's contacts, each an active slot's extremum and its evaluation
-  /// (the pair order (f, g) of AddPair), and whether any is in use. Places, moves or takes away
-  /// the pair's sections.
-  void BeginPair(int k);
-  void Consider(int k, const contact::SurfaceSurfaceExtremum& ext,
-                const contact::SurfacePairEval& e);
-  void EndPair(int k);
-  /// Takes every section away (a fault restored the last good state).
-  void Clear();
+  /// A tracked contact of pair k (not in line mode) at extremum `ext`, evaluation `e` (the pair
+  /// order of AddPair): true when it is line-like, and then the pair is in line mode with its
+  /// sections placed across the contact (the caller retires the contact's row).
+  bool Enter(int k, const contact::SurfaceSurfaceExtremum& ext, const contact::SurfacePairEval& e);
+  /// After a good tick in line mode: the sections follow the line. kLeave: the contact is no
+  /// longer line-like; *u (pair order) is where the point contact resumes. kRelease: every
+  /// section is apart by more than the spacing. Either way the pair has left line mode.
+  enum class Next { kStay, kLeave, kRelease };
+  Next Follow(int k, const std::vector<contact::BodyPose>& poses, Eigen::Vector4d* u);
+  /// Whether a contact of pair k at u (pair order) lies within its line's sections (a global
+  /// stage event for it is the line's own).
+  bool Covers(int k, const Eigen::Vector4d& u) const;
+  /// Leaves line mode (a fault restored the last good state); *u where the point resumes.
+  void Leave(int k, Eigen::Vector4d* u);
 
   int pairs() const { return static_cast<int>(pairs_.size()); }
   bool line(int k) const { return pairs_[static_cast<size_t>(k)].line; }
-  const optimizer::SectionContactTerm::State& section(int k, int side) const {
-    return *pairs_[static_cast<size_t>(k)].state[side];
+  const optimizer::SectionContactTerm::State& section(int k, int i) const {
+    return *pairs_[static_cast<size_t>(k)].state[i];
   }
+  /// Section i's inequality row (its multiplier's index).
+  int row(int k, int i) const { return pairs_[static_cast<size_t>(k)].row[i]; }
+  /// The middle section's parameters in the pair order.
+  Eigen::Vector4d MiddleU(int k) const;
   int64_t placements() const { return placements_; }
+  int64_t moves() const { return moves_; }
 
  private:
   struct Pair {
-    std::shared_ptr<optimizer::SectionContactTerm> term[2];
-    optimizer::SectionContactTerm::State* state[2] = {nullptr, nullptr};
+    std::shared_ptr<optimizer::SectionContactTerm> term[kSections];
+    optimizer::SectionContactTerm::State* state[kSections] = {};
+    int row[kSections] = {};  ///< inequality rows (multiplier indices)
     bool line = false;
-    // This tick's most line-like contact: its curvature ratio and where it lies.
-    double ratio = 1e300;
-    bool seen = false, want = false;
-    Eigen::Vector4d u = Eigen::Vector4d::Zero();
-    Eigen::Vector4d step = Eigen::Vector4d::Zero();  ///< parameters per metre along the line
-    double h = 0.0;                                  ///< half the sections' spacing, m
     int fixed = 0;                                   ///< f's parameter the sections hold
+    double spacing = 0.0;                            ///< between neighbours, in that parameter
+    double h = 0.0;                                  ///< the same in metres
+    Eigen::Vector4d step = Eigen::Vector4d::Zero();  ///< parameters per unit of the held one
   };
-  void Place(Pair* p);
+  void Place(Pair* p, const Eigen::Vector4d& middle);
+  double Wrap(const Pair& p, double d) const;
 
   LineContactOptions options_;
   std::vector<Pair> pairs_;
-  int64_t placements_ = 0;
+  int64_t placements_ = 0, moves_ = 0;
 };
 
 }  // namespace tangent::server

@@ -336,6 +336,12 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
     }
   }
   if (!u.allFinite()) return false;  // (never from the global stage; a defined answer anyway)
+  // A contact along a pair's line is the line's: its sections hold it.
+  if (e.added && declared) {
+    for (const Slot& s : slots_) {
+      if (on_pair(s) && s.line >= 0 && lines_.Covers(s.line, u)) return false;
+    }
+  }
   if (!e.added) {
     // Only the contact the event names: a slot elsewhere on the pair is another contact (the
     // named one may be gone already, e.g. freed by an earlier event).
@@ -459,19 +465,37 @@ void ServoLoop::KeepGood() {
 }
 
 void ServoLoop::FollowLines() {
-  for (int k = 0; k < lines_.pairs(); ++k) lines_.BeginPair(k);
-  for (const Slot& s : slots_) {
-    if (s.line < 0 || !s.state->active) continue;
+  // Pairs in line mode: the sections follow the line, or the point contact resumes.
+  for (int k = 0; k < lines_.pairs(); ++k) {
+    if (!lines_.line(k)) continue;
+    Eigen::Vector4d u;
+    if (lines_.Follow(k, poses_, &u) == LineContacts::Next::kLeave) ResumePoint(k, u);
+  }
+  // A line-like point contact: the pair goes to line mode, and its contacts along the line
+  // are retired (the sections hold them).
+  for (Slot& s : slots_) {
+    if (s.line < 0 || !s.state->active || lines_.line(s.line)) continue;
     const auto& st = static_cast<const optimizer::SurfaceContactTerm::State&>(*s.state);
-    if (st.valid && st.ext.status == contact::ExtremalStatus::kConverged) {
-      lines_.Consider(s.line, st.ext, st.eval);
+    if (!st.valid || st.ext.status != contact::ExtremalStatus::kConverged) continue;
+    if (!lines_.Enter(s.line, st.ext, st.eval)) continue;
+    for (Slot& o : slots_) {
+      if (o.line == s.line && o.state->active && lines_.Covers(s.line, o.U())) {
+        o.state->Deactivate();
+      }
     }
   }
-  for (int k = 0; k < lines_.pairs(); ++k) lines_.EndPair(k);
+}
+
+void ServoLoop::ResumePoint(int line, const Eigen::Vector4d& u) {
+  for (Slot& s : slots_) {
+    if (s.line == line && !s.state->active) {
+      s.Activate(u);
+      return;
+    }
+  }
 }
 
 void ServoLoop::RestoreGood() {
-  lines_.Clear();
   q_ = q_good_;
   solver_->set_multipliers(lambda_e_good_, lambda_i_good_);
   for (Slot& s : slots_) {
@@ -484,6 +508,12 @@ void ServoLoop::RestoreGood() {
       }
     }
     s.state->Reseed(s.good_u);
+  }
+  for (int k = 0; k < lines_.pairs(); ++k) {
+    if (!lines_.line(k)) continue;
+    Eigen::Vector4d u;
+    lines_.Leave(k, &u);
+    ResumePoint(k, u);
   }
   target_ = target_good_;
   orientation_target_ = orientation_target_good_;
@@ -616,11 +646,11 @@ bool ServoLoop::MoveScene(const DeviceSample* fresh_device, double dt, const Inj
     out->violation = good_violation_;
   } else {
     KeepGood();
-    FollowLines();
     good_violation_ = st.max_violation;
     out->violation = st.max_violation;
   }
   problem_->mechanism().Poses(q_, &poses_);
+  if (!fault) FollowLines();
   out->fault = fault;
   out->iterations = st.iterations;
   out->kkt = st.kkt_residual;
@@ -740,6 +770,34 @@ void ServoLoop::FillSnapshot(Snapshot* s) const {
     c.force = slot.row >= 0 && slot.row < lambda.size()
                   ? scene_->device.stiffness * lambda[slot.row]
                   : 0.0;
+  }
+  // A pair in line mode: its middle section, carrying the three sections' load.
+  for (const Slot& slot : slots_) {
+    const int k = slot.line;
+    if (k < 0 || !lines_.line(k) || n >= kMaxContacts) continue;
+    bool first = true;  // (once per pair: its first slot)
+    for (const Slot& o : slots_) {
+      if (&o == &slot) break;
+      first = first && o.line != k;
+    }
+    if (!first) continue;
+    TrackedContact& c = s->contacts[n++];
+    c.surface_a = slot.surface_a;
+    c.surface_b = slot.surface_b;
+    c.body_a = scene_->surfaces[static_cast<size_t>(c.surface_a)].body;
+    c.body_b = scene_->surfaces[static_cast<size_t>(c.surface_b)].body;
+    const Eigen::Vector4d u = lines_.MiddleU(k);
+    const optimizer::SectionContactTerm::State& m = lines_.section(k, 0);
+    for (int i = 0; i < 4; ++i) c.u[i] = u[i];
+    c.beta = m.ext.beta;
+    for (int i = 0; i < 3; ++i) {
+      c.p_a[i] = m.ext.p_g[i];  // (the section is on a, the solver's curve)
+      c.p_b[i] = m.ext.p_f[i];
+    }
+    c.force = 0.0;
+    for (int i = 0; i < LineContacts::kSections; ++i) {
+      c.force += scene_->device.stiffness * lambda[lines_.row(k, i)];
+    }
   }
   s->num_contacts = n;
   const Eigen::Vector3d t = grasp_state_->target;

@@ -155,6 +155,26 @@ TEST(SectionContactTest, RegularWhereTheSurfacePairIsALineOfMinima) {
   }
 }
 
+TEST(SectionContactTest, ReachIsTheGapAndAQuarterOfTheSectionsRadius) {
+  // The solver's step bound (Term::Reach): a's circle has radius r, so β + r/4, at the points'
+  // midpoint.
+  Pair s;
+  auto term = MakeSectionContact(0, &s.a, 1, &s.b);
+  std::mt19937_64 rng(9);
+  const Eigen::VectorXd q = Place(2e-4, 0.02, 0.0, rng);
+  auto st = term->MakeState();
+  auto& sec = static_cast<SectionContactTerm::State&>(*st);
+  sec.Place(1, 0.4, Eigen::Vector3d(0.5, 0.4, 0.0));
+  const double beta = testing::TermValue(s.mech, *term, st.get(), q, nullptr);
+  Eigen::Vector3d p;
+  double reach = 0.0;
+  ASSERT_TRUE(term->Reach(st.get(), &p, &reach));
+  EXPECT_NEAR(reach, beta + 0.25 * kRadius, 1e-12);
+  EXPECT_LT((p - 0.5 * (sec.ext.p_f + sec.ext.p_g)).norm(), 1e-15);
+  sec.Deactivate();
+  EXPECT_FALSE(term->Reach(st.get(), &p, &reach));
+}
+
 TEST(SectionContactTest, InactiveReadsFarWithNoGradient) {
   Pair s;
   auto term = MakeSectionContact(0, &s.a, 1, &s.b);
