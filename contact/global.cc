@@ -718,7 +718,8 @@ void RefineClusters(const GlobalContactStage::Impl& m, const GlobalOptions& opti
              on.status == ExtremalStatus::kConverged && on.beta < options.activation &&
              on.beta > -options.max_penetration;
       } else {
-        ok = (e.status == ExtremalStatus::kConverged || HeldOnMaterialBorder(wa, wb, e, on)) &&
+        ok = (e.status == ExtremalStatus::kConverged || HeldOnMaterialBorder(wa, wb, e, on) ||
+              (options.accept_continuum && e.status == ExtremalStatus::kSingular)) &&
              e.beta < options.activation && e.beta > -options.max_penetration && e.alignment < 0.0;
       }
       // The cluster's own minimum, apart by more than the activation distance where the offsets

@@ -28,6 +28,11 @@ struct GlobalSurface {
 };
 
 struct GlobalOptions {
+  /// Also take a touching pair whose extremal solve ends `singular` on a continuum of minima (a
+  /// rod lying in a groove: every point along the line is an extremal pair). Only where the
+  /// servo holds such a pair as a line (ServoOptions::line_contacts, server/line_contacts.h):
+  /// as a point it is degenerate.
+  bool accept_continuum = false;
   /// A contact is added when its extremal distance β falls below `activation` and removed when
   /// it rises above `release` (> activation: hysteresis), leaves the domain, or is lost. The
   /// offsets of each declared pair's two meshes must reach 2 x `release` together (a face's

@@ -15,7 +15,7 @@ namespace tangent::server {
 class GlobalLink {
  public:
   /// The stage over the servo's scene (its surfaces, declared pairs and global_stage settings).
-  explicit GlobalLink(const ServoLoop& servo) : GlobalLink(servo, servo.scene().global) {}
+  explicit GlobalLink(const ServoLoop& servo) : GlobalLink(servo, servo.GlobalStageOptions()) {}
   GlobalLink(const ServoLoop& servo, const contact::GlobalOptions& options)
       : stage_(servo.GlobalSurfaces(), servo.GlobalPairs(), servo.GlobalBodyPairs(), options) {}
 

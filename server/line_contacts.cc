@@ -79,10 +79,32 @@ bool LineContacts::Enter(int k, const contact::SurfaceSurfaceExtremum& ext,
       if (kappa > 0.0) h = std::min(h, 0.5 / kappa);
     }
   }
-  p.h = h;
+  p.h_free = h;
+  p.per_metre = per_metre;
   p.step = per_metre / per_metre[p.fixed];
-  p.spacing = h * std::abs(per_metre[p.fixed]);
+  if (!Fit(&p, ext.u)) return false;
   Place(&p, ext.u);
+  return true;
+}
+
+bool LineContacts::Fit(Pair* p, const Eigen::Vector4d& middle) const {
+  // Within both surfaces: the side sections' parameters (f's held one, g's two, moved along the
+  // line) stay inside their domains where those end (a rod shorter than its groove: the sections
+  // stay on the rod), at 0.9 of the nearer end either way.
+  const nurbs::NurbsSurface& f = p->term[0]->f();
+  const nurbs::NurbsSurface& g = p->term[0]->g();
+  double h = p->h_free;
+  for (int i : {p->fixed, 2, 3}) {
+    const nurbs::NurbsSurface& s = i < 2 ? f : g;
+    const int d = i < 2 ? i : i - 2;
+    if (Periodic(s, d) || !(std::abs(p->per_metre[i]) > 0.0)) continue;
+    const double room =
+        std::min(middle[i] - Knots(s, d).domain_begin(), Knots(s, d).domain_end() - middle[i]);
+    h = std::min(h, 0.9 * room / std::abs(p->per_metre[i]));
+  }
+  if (!(h > 0.0)) return false;  // at an end of the line: nothing either side
+  p->h = h;
+  p->spacing = h * std::abs(p->per_metre[p->fixed]);
   return true;
 }
 
@@ -158,8 +180,11 @@ LineContacts::Next LineContacts::Follow(int k, const std::vector<contact::BodyPo
   // against no moves: 205 s.)
   const int side = beta[1] < beta[2] ? 1 : 2;
   if (beta[side] < beta[0]) {
-    Place(&p, middle + (side == 1 ? -0.5 : 0.5) * p.spacing * p.step);
-    ++moves_;
+    const Eigen::Vector4d to = middle + (side == 1 ? -0.5 : 0.5) * p.spacing * p.step;
+    if (Fit(&p, to)) {  // (the spacing refitted to the room there)
+      Place(&p, to);
+      ++moves_;
+    }
   }
   return Next::kStay;
 }

@@ -76,12 +76,17 @@ class LineContacts {
     optimizer::SectionContactTerm::State* state[kSections] = {};
     int row[kSections] = {};  ///< inequality rows (multiplier indices)
     bool line = false;
-    int fixed = 0;                                   ///< f's parameter the sections hold
-    double spacing = 0.0;                            ///< between neighbours, in that parameter
-    double h = 0.0;                                  ///< the same in metres
-    Eigen::Vector4d step = Eigen::Vector4d::Zero();  ///< parameters per unit of the held one
+    int fixed = 0;         ///< f's parameter the sections hold
+    double spacing = 0.0;  ///< between neighbours, in that parameter
+    double h = 0.0;        ///< the same in metres
+    double h_free = 0.0;   ///< h before fitting within the surfaces' domains (Fit)
+    Eigen::Vector4d per_metre = Eigen::Vector4d::Zero();  ///< parameters per metre along the line
+    Eigen::Vector4d step = Eigen::Vector4d::Zero();       ///< parameters per unit of the held one
   };
   void Place(Pair* p, const Eigen::Vector4d& middle);
+  /// Sets p's spacing for sections centred at `middle`: h_free, within both surfaces' domains.
+  /// false when there is no room either side.
+  bool Fit(Pair* p, const Eigen::Vector4d& middle) const;
   double Wrap(const Pair& p, double d) const;
 
   LineContactOptions options_;

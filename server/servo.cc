@@ -91,7 +91,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   std::vector<contact::ContactEvent> events;
   {
     contact::GlobalContactStage stage(GlobalSurfaces(), GlobalPairs(), GlobalBodyPairs(),
-                                      scene->global);
+                                      GlobalStageOptions());
     stage.Run(poses_, {}, &events);
   }
   for (const ContactPairSpec& pair : scene->pairs) {
@@ -476,7 +476,9 @@ void ServoLoop::FollowLines() {
   for (Slot& s : slots_) {
     if (s.line < 0 || !s.state->active || lines_.line(s.line)) continue;
     const auto& st = static_cast<const optimizer::SurfaceContactTerm::State&>(*s.state);
-    if (!st.valid || st.ext.status != contact::ExtremalStatus::kConverged) continue;
+    if (!st.valid || (st.ext.status != contact::ExtremalStatus::kConverged &&
+                      st.ext.status != contact::ExtremalStatus::kSingular))
+      continue;
     if (!lines_.Enter(s.line, st.ext, st.eval)) continue;
     for (Slot& o : slots_) {
       if (o.line == s.line && o.state->active && lines_.Covers(s.line, o.U())) {

@@ -110,6 +110,13 @@ class ServoLoop {
 
   const Eigen::VectorXd& q() const { return q_; }
   const Scene& scene() const { return *scene_; }
+  /// The global stage's settings for this servo: the scene's, taking continua of minima as
+  /// contacts when line contacts are on (contact::GlobalOptions::accept_continuum).
+  contact::GlobalOptions GlobalStageOptions() const {
+    contact::GlobalOptions o = scene_->global;
+    o.accept_continuum = options_.line_contacts;
+    return o;
+  }
   /// p_WT: a device sample's tool point T in the world W (m).
   Eigen::Vector3d ToolPoint(const DeviceSample& d) const;
   /// p_WG: the grasp point G on the grasped body in the world W (m).
