@@ -27,6 +27,11 @@ bool Periodic(const nurbs::NurbsSurface& s, int i) {
   return i == 0 ? s.periodic_u() : s.periodic_v();
 }
 
+// A side section must read this much nearer than the middle for the sections to move (m): on a
+// straight line of minima (a rod in a groove) the three read alike, and a move on their rounding
+// differences rocks the part from one end section to the other.
+constexpr double kMoveGap = 1e-7;
+
 }  // namespace
 
 int LineContacts::AddPair(optimizer::Problem* p, int body_f, const nurbs::NurbsSurface* f,
@@ -179,7 +184,7 @@ LineContacts::Next LineContacts::Follow(int k, const std::vector<contact::BodyPo
   // three moved to its lowest point: chain_soak --lines apart at 221 s instead of 566 s; and
   // against no moves: 205 s.)
   const int side = beta[1] < beta[2] ? 1 : 2;
-  if (beta[side] < beta[0]) {
+  if (beta[side] < beta[0] - kMoveGap) {
     const Eigen::Vector4d to = middle + (side == 1 ? -0.5 : 0.5) * p.spacing * p.step;
     if (Fit(&p, to)) {  // (the spacing refitted to the room there)
       Place(&p, to);

@@ -124,6 +124,15 @@ class ServoLoop {
   int active_contacts() const;
   /// The line contacts' sections (server/line_contacts.h).
   const LineContacts& lines() const { return lines_; }
+  /// Line pair k's section loads (middle, then either side), N: their multipliers in the units
+  /// of the reported contact forces.
+  Eigen::Vector3d LineLoads(int k) const {
+    Eigen::Vector3d f;
+    for (int i = 0; i < LineContacts::kSections; ++i) {
+      f[i] = scene_->device.stiffness * solver_->inequality_multipliers()[lines_.row(k, i)];
+    }
+    return f;
+  }
   const optimizer::Problem& problem() const { return *problem_; }
   /// The grasp goal's target (world, m): follows the tool point at the device's follow speed.
   Eigen::Vector3d GraspTarget() const;

@@ -96,6 +96,10 @@ Outcome Drive(bool lines, double seconds) {
     if (k == 3000) {
       for (int c = 0; c < snap.num_contacts; ++c) out.line_force += snap.contacts[c].force;
     }
+    if (lines && k % 250 == 0 && servo.lines().line(0)) {
+      const Eigen::Vector3d f = servo.LineLoads(0);
+      std::printf("  %.2f s: section loads %.4f %.4f %.4f N\n", t, f[1], f[0], f[2]);
+    }
   }
   if (pressed > 0) out.press_force /= pressed;
   std::printf(
