@@ -215,6 +215,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
     if (!s.floating) s.state->Deactivate();
   }
   lines_.Bind(solver_.get());
+  entering_.assign(static_cast<size_t>(lines_.pairs()), 0);
   for (const auto& e : events) Apply(ToEventMsg(e));  // (a cold pass only adds)
   grasp_state_ = &solver_->data().Of(*grasp_);
   if (grasp_orientation_) grasp_orientation_state_ = &solver_->data().Of(*grasp_orientation_);
@@ -468,23 +469,27 @@ void ServoLoop::FollowLines() {
   // Pairs in line mode: the sections follow the line, or the point contact resumes.
   for (int k = 0; k < lines_.pairs(); ++k) {
     if (!lines_.line(k)) continue;
+    const bool entered = entering_[static_cast<size_t>(k)];
+    entering_[static_cast<size_t>(k)] = 0;
     Eigen::Vector4d u;
-    if (lines_.Follow(k, poses_, &u) == LineContacts::Next::kLeave) ResumePoint(k, u);
+    const LineContacts::Next next = lines_.Follow(k, poses_, &u);
+    if (next == LineContacts::Next::kLeave && !entered) ResumePoint(k, u);
+    if (next != LineContacts::Next::kStay || !entered) continue;
+    // Entered a tick ago: the sections have taken the load beside the point contacts along the
+    // line (one solve with both), which are retired now.
+    for (Slot& o : slots_) {
+      if (o.line == k && o.state->active && lines_.Covers(k, o.U())) o.state->Deactivate();
+    }
   }
-  // A line-like point contact: the pair goes to line mode, and its contacts along the line
-  // are retired (the sections hold them).
+  // A line-like point contact: the pair goes to line mode; its contacts along the line stay for
+  // one more solve, so that the sections take the load from them, and are retired after it.
   for (Slot& s : slots_) {
     if (s.line < 0 || !s.state->active || lines_.line(s.line)) continue;
     const auto& st = static_cast<const optimizer::SurfaceContactTerm::State&>(*s.state);
     if (!st.valid || (st.ext.status != contact::ExtremalStatus::kConverged &&
                       st.ext.status != contact::ExtremalStatus::kSingular))
       continue;
-    if (!lines_.Enter(s.line, st.ext, st.eval)) continue;
-    for (Slot& o : slots_) {
-      if (o.line == s.line && o.state->active && lines_.Covers(s.line, o.U())) {
-        o.state->Deactivate();
-      }
-    }
+    if (lines_.Enter(s.line, st.ext, st.eval)) entering_[static_cast<size_t>(s.line)] = 1;
   }
 }
 
@@ -515,7 +520,8 @@ void ServoLoop::RestoreGood() {
     if (!lines_.line(k)) continue;
     Eigen::Vector4d u;
     lines_.Leave(k, &u);
-    ResumePoint(k, u);
+    if (!entering_[static_cast<size_t>(k)]) ResumePoint(k, u);  // (else its point is still held)
+    entering_[static_cast<size_t>(k)] = 0;
   }
   target_ = target_good_;
   orientation_target_ = orientation_target_good_;

@@ -49,8 +49,8 @@ struct ServoOptions {
   /// Line contacts (server/line_contacts.h): a nearly conformal contact of a declared pair of
   /// untrimmed surfaces is held by three sections across its line instead of its one point.
   /// Off by default: on the paperclip soak it holds the chain to 566 s instead of 139 s, but
-  /// the figure moves between 74 and 566 s with the thresholds, and a 9 cm jump leaves 1.7e-6 m
-  /// of violation (ServoSafetyTest's bar is 1e-6): docs/reliability.md, "Soak".
+  /// the figure moves between 136 and 566 s with the thresholds, and the paperclips' tick costs
+  /// 1.37x the instructions (docs/reliability.md, "Soak").
   bool line_contacts = false;
   LineContactOptions line;
   /// optimizer::SolverOptions::step_reach (off by default, as line_contacts).
@@ -221,6 +221,7 @@ class ServoLoop {
   optimizer::Attachment grasp_at_;
   std::vector<Slot> slots_;
   LineContacts lines_;
+  std::vector<char> entering_;  ///< per line pair: entered line mode at the last good tick
   /// After a good tick: line-like contacts go to line mode (their rows retired, the sections
   /// placed), lines follow, and lines no longer line-like resume their point contact (lines_).
   void FollowLines();
