@@ -622,4 +622,13 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
   return out;
 }
 
+Eigen::Vector4d IntoPairDomain(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
+                               const Eigen::Vector4d& u) {
+  Eigen::Vector4d lo, hi;
+  lo << Lo(f), Lo(g);
+  hi << Hi(f), Hi(g);
+  return internal::ClampOrWrap<4>(u, lo, hi,
+                                  {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()});
+}
+
 }  // namespace tangent::contact

@@ -215,6 +215,11 @@ CurveSurfaceExtremum SolveCurveSurface(const nurbs::NurbsSurface& f, const BodyP
                                        const Eigen::Vector3d& seed,
                                        const ExtremalOptions& options = {});
 
+/// Pair parameters (u, v, s, t) moved into both surfaces' domains: wrapped round in a periodic
+/// direction, clamped elsewhere.
+Eigen::Vector4d IntoPairDomain(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
+                               const Eigen::Vector4d& u);
+
 /// The sign of a boundary extremum's distance: which side of the surfaces d = f − g lies on.
 /// By g's normal when d is more along it than along f's, else by f's (d·n_f < 0 is apart for a
 /// facing pair); +1 when d = 0. At an interior extremum, where d ∥ n_g, it is sign(d·n_g).

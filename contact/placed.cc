@@ -64,18 +64,12 @@ nurbs::CurvePoint<3> BodyCurve::Evaluate(double tau, int* span_hint,
     return out;
   }
   nurbs::SurfacePoint s;
-  if (iso_fixed_ == 0) {  // S(value, τ): the line along v
-    surface_->Evaluate<2>(iso_value_, tau, surface_hint, &s);
+  if (iso_fixed_ >= 0) {  // S(value, τ), the line along v; or S(τ, value), along u
+    const bool along_v = iso_fixed_ == 0;
+    surface_->Evaluate<2>(along_v ? iso_value_ : tau, along_v ? tau : iso_value_, surface_hint, &s);
     out.C = s.S;
-    out.C1 = s.S_v;
-    out.C2 = s.S_vv;
-    return out;
-  }
-  if (iso_fixed_ == 1) {  // S(τ, value): the line along u
-    surface_->Evaluate<2>(tau, iso_value_, surface_hint, &s);
-    out.C = s.S;
-    out.C1 = s.S_u;
-    out.C2 = s.S_uu;
+    out.C1 = along_v ? s.S_v : s.S_u;
+    out.C2 = along_v ? s.S_vv : s.S_uu;
     return out;
   }
   nurbs::CurvePoint<2> c;

@@ -104,9 +104,7 @@ void BodyContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState* st
                                Eigen::Ref<Eigen::MatrixXd> J_b) const {
   auto* st = static_cast<State*>(state);
   if (!st->active || st->f < 0) {  // a free slot: far apart, no gradient, nothing evaluated
-    r[0] = ContactSlotState::kInactiveDistance;
-    J_a.setZero();
-    J_b.setZero();
+    InactiveRow(r, J_a, J_b);
     return;
   }
   if (st->swapped) {

@@ -127,9 +127,7 @@ void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
                                   Eigen::Ref<Eigen::MatrixXd> J_b) const {
   auto* st = static_cast<State*>(state);
   if (!st->active) {  // a free slot: far apart, no gradient, nothing evaluated
-    r[0] = ContactSlotState::kInactiveDistance;
-    J_a.setZero();
-    J_b.setZero();
+    InactiveRow(r, J_a, J_b);
     return;
   }
   Update(poses, st);

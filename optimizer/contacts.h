@@ -40,6 +40,14 @@ struct ContactSlotState : TermState {
   void Deactivate() { active = false; }
 };
 
+/// A free slot's row (ContactSlotState): β = kInactiveDistance, no gradient.
+inline void InactiveRow(Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
+                        Eigen::Ref<Eigen::MatrixXd> J_b) {
+  r[0] = ContactSlotState::kInactiveDistance;
+  J_a.setZero();
+  J_b.setZero();
+}
+
 /// How a contact term follows its pair between solves: the tracker's corrector steps and when
 /// its point is taken as the contact. The defaults are exact: the point is the extremum to the
 /// extremal solver's own tolerance, else a full solve runs. docs/benchmarks.md measures what

@@ -43,9 +43,7 @@ void SectionContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
                                   Eigen::Ref<Eigen::MatrixXd> J_b) const {
   auto* st = static_cast<State*>(state);
   if (!st->active) {
-    r[0] = ContactSlotState::kInactiveDistance;
-    J_a.setZero();
-    J_b.setZero();
+    InactiveRow(r, J_a, J_b);
     return;
   }
   Update(poses, st);

@@ -1,4 +1,5 @@
 #include "optimizer/solver.h"
+#include "optimizer/step_reach.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -393,31 +394,6 @@ void Solver::SecondOrderCheck(const Eigen::VectorXd& q, SolveStats* st) {
       st->reduced_hessian_min_eigenvalue > 1e-12 * std::max(1.0, eig.eigenvalues().maxCoeff());
 }
 
-double Solver::ReachFraction(const Eigen::VectorXd& q) const {
-  const Mechanism& m = problem_.mechanism();
-  // The displacement of world point p fixed on body b by the full step.
-  auto moved = [&](int b, const Eigen::Vector3d& p) -> Eigen::Vector3d {
-    const int o = b >= 0 ? m.offset(b) : -1;
-    if (o < 0) return Eigen::Vector3d::Zero();
-    const Eigen::Quaterniond Q0(q[o + 3], q[o + 4], q[o + 5], q[o + 6]);
-    const Eigen::Vector4d q1 = q.segment<4>(o + 3) + step_.segment<4>(o + 3);
-    const Eigen::Quaterniond Q1(q1[0], q1[1], q1[2], q1[3]);
-    const Eigen::Vector3d p_B = Q0.normalized().conjugate() * (p - q.segment<3>(o));
-    return q.segment<3>(o) + step_.segment<3>(o) + Q1.normalized() * p_B - p;
-  };
-  double alpha = 1.0;
-  const auto& rows = problem_.inequalities();
-  for (size_t i = 0; i < rows.size(); ++i) {
-    const Term& t = *rows[i].term;
-    Eigen::Vector3d p;
-    double reach = 0.0;
-    if (!t.Reach(data().state(1, static_cast<int>(i)), &p, &reach)) continue;
-    const double d = (moved(t.body_a(), p) - moved(t.body_b(), p)).norm();
-    if (d > reach) alpha = std::min(alpha, reach / d);
-  }
-  return alpha;
-}
-
 void Solver::Normalize(Eigen::VectorXd* q) const {
   const Mechanism& m = problem_.mechanism();
   for (int b = 0; b < m.num_bodies(); ++b) {
@@ -640,7 +616,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     // Design mode: the Lagrangian at q and its slope along the step (kkt_ is its gradient).
     const double lagrangian = design ? Lagrangian(q) : 0.0;
     const double slope = design ? kkt_.dot(step_) : 0.0;
-    double alpha = options_.step_reach ? ReachFraction(q) : 1.0;
+    double alpha = options_.step_reach ? ReachFraction(problem_, data(), q, step_) : 1.0;
     for (int k = 0; k < (design ? 30 : 8); ++k) {
       q_try_ = q + alpha * step_;
       Normalize(&q_try_);

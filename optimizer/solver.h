@@ -150,8 +150,6 @@ class Solver {
   double Violation() const;
   double Complementarity() const;
   void Normalize(Eigen::VectorXd* q) const;
-  /// The largest fraction (≤ 1) of step_ from q within every contact row's reach.
-  double ReachFraction(const Eigen::VectorXd& q) const;
 
   /// Assembles and factorizes the Newton matrix for the current active set and solves for step_
   /// (damped until positive definite and within the trust region); @return the damping used.

@@ -13,6 +13,8 @@
 
 #include "contact/extremal.h"
 #include "nurbs/primitives.h"
+#include "optimizer/problem.h"
+#include "optimizer/step_reach.h"
 #include "testing/term_derivatives.h"
 
 namespace tangent::optimizer {
@@ -173,6 +175,33 @@ TEST(SectionContactTest, ReachIsTheGapAndAQuarterOfTheSectionsRadius) {
   EXPECT_LT((p - 0.5 * (sec.ext.p_f + sec.ext.p_g)).norm(), 1e-15);
   sec.Deactivate();
   EXPECT_FALSE(term->Reach(st.get(), &p, &reach));
+}
+
+TEST(SectionContactTest, AStepIsShortenedToTheRowsReach) {
+  // ReachFraction (SolverOptions::step_reach): a 20 mm translation of a against b moves the
+  // section's contact point 20 mm between the bodies; the step is cut to reach / 20 mm, and a
+  // step within the reach is kept whole.
+  Pair s;
+  Problem problem(s.mech);
+  auto term = MakeSectionContact(0, &s.a, 1, &s.b);
+  problem.AddInequality(term);
+  ProblemData data(problem);
+  auto& sec = data.Of(*term);
+  sec.Place(1, 0.4, Eigen::Vector3d(0.5, 0.4, 0.0));
+  std::mt19937_64 rng(13);
+  const Eigen::VectorXd q = Place(2e-4, 0.0, 0.0, rng);
+  testing::TermValue(s.mech, *term, &sec, q, nullptr);
+  Eigen::Vector3d p;
+  double reach = 0.0;
+  ASSERT_TRUE(term->Reach(&sec, &p, &reach));
+  Eigen::VectorXd step = Eigen::VectorXd::Zero(14);
+  step[1] = 0.02;
+  EXPECT_NEAR(ReachFraction(problem, data, q, step), reach / 0.02, 1e-12);
+  step[1] = 0.5 * reach;
+  EXPECT_EQ(ReachFraction(problem, data, q, step), 1.0);
+  sec.Deactivate();
+  step[1] = 0.02;
+  EXPECT_EQ(ReachFraction(problem, data, q, step), 1.0);  // an inactive row bounds nothing
 }
 
 TEST(SectionContactTest, InactiveReadsFarWithNoGradient) {
