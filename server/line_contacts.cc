@@ -9,17 +9,6 @@ namespace tangent::server {
 
 namespace {
 
-// A parameter moved into a knot domain: wrapped round when the surface is periodic in it,
-// clamped to the ends otherwise.
-double IntoDomain(double x, const nurbs::KnotVector& k, bool periodic) {
-  const double a = k.domain_begin(), b = k.domain_end();
-  if (periodic) {
-    const double w = b - a;
-    return a + (x - a - w * std::floor((x - a) / w));
-  }
-  return std::clamp(x, a, b);
-}
-
 const nurbs::KnotVector& Knots(const nurbs::NurbsSurface& s, int i) {
   return i == 0 ? s.knots_u() : s.knots_v();
 }
@@ -89,6 +78,7 @@ bool LineContacts::Enter(int k, const contact::SurfaceSurfaceExtremum& ext,
   p.step = per_metre / per_metre[p.fixed];
   if (!Fit(&p, ext.u)) return false;
   Place(&p, ext.u);
+  p.entering = true;
   return true;
 }
 
@@ -114,17 +104,11 @@ bool LineContacts::Fit(Pair* p, const Eigen::Vector4d& middle) const {
 }
 
 void LineContacts::Place(Pair* p, const Eigen::Vector4d& middle) {
-  const nurbs::NurbsSurface& f = p->term[0]->f();
-  const nurbs::NurbsSurface& g = p->term[0]->g();
-  const int run = 1 - p->fixed;
   static constexpr double kOffset[kSections] = {0.0, -1.0, 1.0};
   for (int i = 0; i < kSections; ++i) {
-    const Eigen::Vector4d at = middle + kOffset[i] * p->spacing * p->step;
-    const double value = IntoDomain(at[p->fixed], Knots(f, p->fixed), Periodic(f, p->fixed));
-    const double tau = IntoDomain(at[run], Knots(f, run), Periodic(f, run));
-    const Eigen::Vector3d seed(IntoDomain(at[2], g.knots_u(), g.periodic_u()),
-                               IntoDomain(at[3], g.knots_v(), g.periodic_v()), tau);
-    p->state[i]->Place(p->fixed, value, seed);
+    const Eigen::Vector4d at = contact::IntoPairDomain(p->term[0]->f(), p->term[0]->g(),
+                                                       middle + kOffset[i] * p->spacing * p->step);
+    p->state[i]->Place(p->fixed, at[p->fixed], Eigen::Vector3d(at[2], at[3], at[1 - p->fixed]));
   }
   p->line = true;
   ++placements_;
@@ -150,11 +134,13 @@ void LineContacts::Leave(int k, Eigen::Vector4d* u) {
   *u = MiddleU(k);
   for (auto* s : p.state) s->Deactivate();
   p.line = false;
+  p.entering = false;
 }
 
 LineContacts::Next LineContacts::Follow(int k, const std::vector<contact::BodyPose>& poses,
                                         Eigen::Vector4d* u) {
   Pair& p = pairs_[static_cast<size_t>(k)];
+  p.entering = false;
   double beta[kSections];
   for (int i = 0; i < kSections; ++i) {
     // (Each was evaluated at the tick's last iterate; at `poses` they are current.)

@@ -40,6 +40,9 @@ class LineContacts {
   /// pair's index here. The surfaces must outlive this.
   int AddPair(optimizer::Problem* p, int body_f, const nurbs::NurbsSurface* f, int body_g,
               const nurbs::NurbsSurface* g);
+  /// Whether pair k entered line mode at the last Enter and has not followed since: its point
+  /// contacts are still held beside the sections for one solve (the load handed over).
+  bool entering(int k) const { return pairs_[static_cast<size_t>(k)].entering; }
   /// Takes the sections' data in the solver (after it is made); all inactive.
   void Bind(optimizer::Solver* solver);
 
@@ -76,10 +79,11 @@ class LineContacts {
     optimizer::SectionContactTerm::State* state[kSections] = {};
     int row[kSections] = {};  ///< inequality rows (multiplier indices)
     bool line = false;
-    int fixed = 0;         ///< f's parameter the sections hold
-    double spacing = 0.0;  ///< between neighbours, in that parameter
-    double h = 0.0;        ///< the same in metres
-    double h_free = 0.0;   ///< h before fitting within the surfaces' domains (Fit)
+    bool entering = false;  ///< entered, not yet followed (entering())
+    int fixed = 0;          ///< f's parameter the sections hold
+    double spacing = 0.0;   ///< between neighbours, in that parameter
+    double h = 0.0;         ///< the same in metres
+    double h_free = 0.0;    ///< h before fitting within the surfaces' domains (Fit)
     Eigen::Vector4d per_metre = Eigen::Vector4d::Zero();  ///< parameters per metre along the line
     Eigen::Vector4d step = Eigen::Vector4d::Zero();       ///< parameters per unit of the held one
   };

@@ -215,7 +215,6 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
     if (!s.floating) s.state->Deactivate();
   }
   lines_.Bind(solver_.get());
-  entering_.assign(static_cast<size_t>(lines_.pairs()), 0);
   for (const auto& e : events) Apply(ToEventMsg(e));  // (a cold pass only adds)
   grasp_state_ = &solver_->data().Of(*grasp_);
   if (grasp_orientation_) grasp_orientation_state_ = &solver_->data().Of(*grasp_orientation_);
@@ -465,43 +464,6 @@ void ServoLoop::KeepGood() {
   orientation_target_good_ = orientation_target_;
 }
 
-void ServoLoop::FollowLines() {
-  // Pairs in line mode: the sections follow the line, or the point contact resumes.
-  for (int k = 0; k < lines_.pairs(); ++k) {
-    if (!lines_.line(k)) continue;
-    const bool entered = entering_[static_cast<size_t>(k)];
-    entering_[static_cast<size_t>(k)] = 0;
-    Eigen::Vector4d u;
-    const LineContacts::Next next = lines_.Follow(k, poses_, &u);
-    if (next == LineContacts::Next::kLeave && !entered) ResumePoint(k, u);
-    if (next != LineContacts::Next::kStay || !entered) continue;
-    // Entered a tick ago: the sections have taken the load beside the point contacts along the
-    // line (one solve with both), which are retired now.
-    for (Slot& o : slots_) {
-      if (o.line == k && o.state->active && lines_.Covers(k, o.U())) o.state->Deactivate();
-    }
-  }
-  // A line-like point contact: the pair goes to line mode; its contacts along the line stay for
-  // one more solve, so that the sections take the load from them, and are retired after it.
-  for (Slot& s : slots_) {
-    if (s.line < 0 || !s.state->active || lines_.line(s.line)) continue;
-    const auto& st = static_cast<const optimizer::SurfaceContactTerm::State&>(*s.state);
-    if (!st.valid || (st.ext.status != contact::ExtremalStatus::kConverged &&
-                      st.ext.status != contact::ExtremalStatus::kSingular))
-      continue;
-    if (lines_.Enter(s.line, st.ext, st.eval)) entering_[static_cast<size_t>(s.line)] = 1;
-  }
-}
-
-void ServoLoop::ResumePoint(int line, const Eigen::Vector4d& u) {
-  for (Slot& s : slots_) {
-    if (s.line == line && !s.state->active) {
-      s.Activate(u);
-      return;
-    }
-  }
-}
-
 void ServoLoop::RestoreGood() {
   q_ = q_good_;
   solver_->set_multipliers(lambda_e_good_, lambda_i_good_);
@@ -518,10 +480,10 @@ void ServoLoop::RestoreGood() {
   }
   for (int k = 0; k < lines_.pairs(); ++k) {
     if (!lines_.line(k)) continue;
+    const bool entered = lines_.entering(k);
     Eigen::Vector4d u;
     lines_.Leave(k, &u);
-    if (!entering_[static_cast<size_t>(k)]) ResumePoint(k, u);  // (else its point is still held)
-    entering_[static_cast<size_t>(k)] = 0;
+    if (!entered) ResumePoint(k, u);  // (else its point is still held)
   }
   target_ = target_good_;
   orientation_target_ = orientation_target_good_;
@@ -779,34 +741,7 @@ void ServoLoop::FillSnapshot(Snapshot* s) const {
                   ? scene_->device.stiffness * lambda[slot.row]
                   : 0.0;
   }
-  // A pair in line mode: its middle section, carrying the three sections' load.
-  for (const Slot& slot : slots_) {
-    const int k = slot.line;
-    if (k < 0 || !lines_.line(k) || n >= kMaxContacts) continue;
-    bool first = true;  // (once per pair: its first slot)
-    for (const Slot& o : slots_) {
-      if (&o == &slot) break;
-      first = first && o.line != k;
-    }
-    if (!first) continue;
-    TrackedContact& c = s->contacts[n++];
-    c.surface_a = slot.surface_a;
-    c.surface_b = slot.surface_b;
-    c.body_a = scene_->surfaces[static_cast<size_t>(c.surface_a)].body;
-    c.body_b = scene_->surfaces[static_cast<size_t>(c.surface_b)].body;
-    const Eigen::Vector4d u = lines_.MiddleU(k);
-    const optimizer::SectionContactTerm::State& m = lines_.section(k, 0);
-    for (int i = 0; i < 4; ++i) c.u[i] = u[i];
-    c.beta = m.ext.beta;
-    for (int i = 0; i < 3; ++i) {
-      c.p_a[i] = m.ext.p_g[i];  // (the section is on a, the solver's curve)
-      c.p_b[i] = m.ext.p_f[i];
-    }
-    c.force = 0.0;
-    for (int i = 0; i < LineContacts::kSections; ++i) {
-      c.force += scene_->device.stiffness * lambda[lines_.row(k, i)];
-    }
-  }
+  FillLineContacts(s, &n);
   s->num_contacts = n;
   const Eigen::Vector3d t = grasp_state_->target;
   for (int i = 0; i < 3; ++i) s->grasp_target[i] = t[i];

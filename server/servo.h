@@ -221,12 +221,14 @@ class ServoLoop {
   optimizer::Attachment grasp_at_;
   std::vector<Slot> slots_;
   LineContacts lines_;
-  std::vector<char> entering_;  ///< per line pair: entered line mode at the last good tick
   /// After a good tick: line-like contacts go to line mode (their rows retired, the sections
   /// placed), lines follow, and lines no longer line-like resume their point contact (lines_).
   void FollowLines();
   /// Activates a free slot of line pair `line` at u (pair order), if one is free.
   void ResumePoint(int line, const Eigen::Vector4d& u);
+  /// The snapshot's contacts from *count on: each pair in line mode as its middle section.
+  void FillLineContacts(Snapshot* s, int* count) const;
+  // (FollowLines, ResumePoint and FillLineContacts are in servo_lines.cc.)
   Eigen::VectorXd q_;
   std::vector<contact::BodyPose> poses_;
   // Last good state (restored after a fault).
