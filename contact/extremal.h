@@ -9,6 +9,8 @@
 
 namespace tangent::contact {
 
+struct PairCharts;  // contact/charted_pair.h
+
 /// How an extremal-distance solve ended.
 enum class ExtremalStatus {
   kConverged,     ///< an interior extremum, to the step tolerance
@@ -82,6 +84,9 @@ void EvaluatePair(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                   const nurbs::NurbsSurface& g, const BodyPose& pose_g, const Eigen::Vector4d& u,
                   nurbs::SpanHint* hint_f, nurbs::SpanHint* hint_g, SurfacePairEval* out,
                   bool gradient_form = true);
+/// Fills d, F, F_u (and grad, hess when `gradient_form`) from the surface points already in
+/// *out (evaluated in their parameters, or in a pole's chart: contact/pole_chart.h).
+void PairEquations(SurfacePairEval* out, bool gradient_form = true);
 /// Fills e->grad and e->hess from the surface points already in *e.
 void FillGradientForm(SurfacePairEval* e);
 
@@ -158,10 +163,11 @@ double ScaledContactResidual(const SurfacePairEval& e, double beta);
 /// kConverged when the contact equations' scaled residual there is below `tolerance` (the
 /// tracker's measure: |d·x_g|, |d·y_g| over the pair's length scale, |n_f·x_g|, |n_f·y_g| in
 /// radians), else kNotConverged (the caller then solves). Allocation free.
+/// `charts` (optional): sides evaluated in their pole's chart (a ContactTracker's charts()).
 SurfaceSurfaceExtremum ExtremumAt(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                                   const nurbs::NurbsSurface& g, const BodyPose& pose_g,
                                   const Eigen::Vector4d& u, double tolerance,
-                                  SurfacePairEval* at_solution);
+                                  SurfacePairEval* at_solution, const PairCharts* charts = nullptr);
 
 /// Extremal distance between a world point x and surface f on a body: d = f − x,
 /// equations [d·f_u, d·f_v] (regular at d = 0, where the Jacobian is the first fundamental form).
@@ -227,6 +233,10 @@ double BoundarySide(const Eigen::Vector3d& d, const Eigen::Vector3d& n_f,
                     const Eigen::Vector3d& n_g);
 
 namespace internal {
+/// The record of the pair evaluation e at parameters u as an interior extremum: points, frames,
+/// β = d·n_g along n_g, alignment (callers override β and direction at a boundary).
+void FillPairFields(const SurfacePairEval& e, const Eigen::Vector4d& u,
+                    SurfaceSurfaceExtremum* out);
 /// Kind from the eigenvalues of a Hessian restricted to the free parameters; eigenvalues below
 /// 1e-6 of max(scale, largest eigenvalue) count as zero (scale: the first fundamental forms').
 template <int N>

@@ -36,6 +36,7 @@ void EvaluatePlaced(const nurbs::NurbsSurface& surface, const BodyPose& pose, do
   w.S_vv = pose.R_WB * b.S_vv;
   out->N_W = w.S_u.cross(w.S_v);
   out->pole = nurbs::IsDegenerate(b);
+  out->charted = false;
   if (out->pole) out->n_W_limit = pose.R_WB * nurbs::UnitNormal(surface, u, v, b);
   out->N_W_u = w.S_uu.cross(w.S_v) + w.S_u.cross(w.S_uv);
   out->N_W_v = w.S_uv.cross(w.S_v) + w.S_u.cross(w.S_vv);

@@ -26,6 +26,9 @@ struct PlacedSurfacePoint {
   Eigen::Vector3d N_W;        ///< S_u × S_v in W (unnormalized normal; 0 at a pole)
   bool pole = false;          ///< a degenerate point of the parameterization (nurbs::IsDegenerate)
   Eigen::Vector3d n_W_limit;  ///< at a pole: the limit unit normal in W (nurbs::UnitNormal)
+  /// The partials are in a pole's tangent-plane chart (x, y), not in (u, v) (EvaluateCharted,
+  /// contact/pole_chart.h): regular at the pole itself.
+  bool charted = false;
   /// Unit outward normal in W: N/|N|, or at a pole the limit normal (computed on demand: most
   /// evaluations inside a solve never need it).
   Eigen::Vector3d unit_normal() const {

@@ -12,17 +12,18 @@ constexpr int kPoleAngles = 64;
 
 }  // namespace
 
-PoleRow FindPoleRow(const nurbs::NurbsSurface& s, const Eigen::Vector2d& uv) {
+PoleRow FindPoleRow(const nurbs::NurbsSurface& s, const Eigen::Vector2d& uv, double fraction) {
   for (int across : {1, 0}) {
+    if (across == 1 ? s.periodic_v() : s.periodic_u()) continue;  // no edge to collapse
     const nurbs::KnotVector& k = across == 1 ? s.knots_v() : s.knots_u();
     const double lo = k.domain_begin(), hi = k.domain_end(), w = hi - lo;
     PoleRow row;
     row.found = true;
     row.across = across;
-    if (uv[across] - lo <= 1e-3 * w) {
+    if (uv[across] - lo <= fraction * w) {
       row.bound = lo;
       row.inward = 1.0;
-    } else if (hi - uv[across] <= 1e-3 * w) {
+    } else if (hi - uv[across] <= fraction * w) {
       row.bound = hi;
       row.inward = -1.0;
     } else {

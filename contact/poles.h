@@ -21,15 +21,17 @@ namespace tangent::contact::internal {
 /// (some departure decreases the distance), or answer the pole itself (it is the extremum).
 enum class PoleAction { kNone, kEscape, kExtremum };
 
-/// A pole row at or within 1e-3 of the domain from uv: the parameter across it (1: the row
-/// v = bound, where S_u vanishes; 0: u = bound, where S_v vanishes), the bound, the inward sign.
+/// A pole row at or within `fraction` (1e-3 by default) of the domain from uv: the parameter
+/// across it (1: the row v = bound, where S_u vanishes; 0: u = bound, where S_v vanishes), the
+/// bound, the inward sign.
 struct PoleRow {
   bool found = false;
   int across = 1;
   double bound = 0.0;
   double inward = 1.0;
 };
-PoleRow FindPoleRow(const nurbs::NurbsSurface& s, const Eigen::Vector2d& uv);
+PoleRow FindPoleRow(const nurbs::NurbsSurface& s, const Eigen::Vector2d& uv,
+                    double fraction = 1e-3);
 
 /// Whether the domain edge where parameter `across` is held at `bound` collapses to a point
 /// there, measured at uv's other parameter: the derivative along the row vanishes

@@ -34,6 +34,9 @@ void ContactTracker::Rebind(const nurbs::NurbsSurface& f, const nurbs::NurbsSurf
   hi_ << f.knots_u().domain_end(), f.knots_v().domain_end(), g.knots_u().domain_end(),
       g.knots_v().domain_end();
   periodic_ = {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()};
+  poles_[0].Find(f);
+  poles_[1].Find(g);
+  charts_ = {};
   hint_f_ = {};
   hint_g_ = {};
   u_q_.setZero();
@@ -42,9 +45,64 @@ void ContactTracker::Rebind(const nurbs::NurbsSurface& f, const nurbs::NurbsSurf
 
 TrackStatus ContactTracker::Reset(const Vector7d& q_f, const Vector7d& q_g,
                                   const Eigen::Vector4d& u) {
-  u_ = internal::ClampOrWrap<4>(u, lo_, hi_, periodic_);
+  params_ = internal::ClampOrWrap<4>(u, lo_, hi_, periodic_);
+  u_ = params_;
+  charts_ = {};
+  for (int k = 0; k < 2; ++k) {
+    const PoleChart* c = poles_[k].Near(params_.segment<2>(2 * k), kChartEnter);
+    if (!c || !ChartHolds(k == 0 ? *f_ : *g_, *c, params_.segment<2>(2 * k),
+                          k == 0 ? &hint_f_ : &hint_g_)) {
+      continue;
+    }
+    charts_.side[k] = *c;
+    u_.segment<2>(2 * k) = ChartCoordinates(k == 0 ? *f_ : *g_, *c, params_.segment<2>(2 * k),
+                                            k == 0 ? &hint_f_ : &hint_g_);
+  }
   u_q_.setZero();
   return Evaluate(q_f, q_g, /*correct=*/false);
+}
+
+bool ContactTracker::ToParameters() {
+  for (int k = 0; k < 2; ++k) {
+    const PoleChart& c = charts_.side[k];
+    if (!c.valid()) {
+      params_.segment<2>(2 * k) = u_.segment<2>(2 * k);
+      continue;
+    }
+    Eigen::Vector2d uv;
+    if (!ChartParameters(k == 0 ? *f_ : *g_, c, u_.segment<2>(2 * k), params_.segment<2>(2 * k),
+                         k == 0 ? &hint_f_ : &hint_g_, &uv) ||
+        c.Rho(uv) > kChartReach * c.width) {
+      return false;
+    }
+    params_.segment<2>(2 * k) = uv;
+  }
+  return true;
+}
+
+void ContactTracker::SwitchCharts() {
+  for (int k = 0; k < 2; ++k) {
+    const nurbs::NurbsSurface& s = k == 0 ? *f_ : *g_;
+    nurbs::SpanHint* hint = k == 0 ? &hint_f_ : &hint_g_;
+    const Eigen::Vector2d uv = params_.segment<2>(2 * k);
+    PoleChart& c = charts_.side[k];
+    if (c.valid()) {
+      if (c.Rho(uv) <= kChartLeave * c.width) continue;
+      // Leaving: u_q's rows from the chart's coordinates back to the parameters.
+      const Eigen::Matrix2d D = ChartFromParameters(s, c, uv, hint);
+      const Eigen::Matrix<double, 2, 14> rows = D.inverse() * u_q_.middleRows<2>(2 * k);
+      u_q_.middleRows<2>(2 * k) = rows;
+      u_.segment<2>(2 * k) = uv;
+      c = PoleChart{};
+    } else if (const PoleChart* near = poles_[k].Near(uv, kChartEnter);
+               near && ChartHolds(s, *near, uv, hint)) {
+      const Eigen::Matrix2d D = ChartFromParameters(s, *near, uv, hint);
+      const Eigen::Matrix<double, 2, 14> rows = D * u_q_.middleRows<2>(2 * k);
+      u_q_.middleRows<2>(2 * k) = rows;
+      u_.segment<2>(2 * k) = ChartCoordinates(s, *near, uv, hint);
+      c = *near;
+    }
+  }
 }
 
 TrackStatus ContactTracker::Step(const Vector7d& q_f, const Vector7d& q_g) {
@@ -52,6 +110,10 @@ TrackStatus ContactTracker::Step(const Vector7d& q_f, const Vector7d& q_g) {
   Eigen::Matrix<double, 14, 1> dq;
   dq << q_f - q_f_, q_g - q_g_;
   u_ += u_q_ * dq;
+  if (!ToParameters()) {
+    status_ = TrackStatus::kLost;
+    return status_;
+  }
   if (options_.corrector_steps <= 0) {
     // No corrector: only the residual tells a prediction that left the basin.
     const TrackStatus s = Evaluate(q_f, q_g, /*correct=*/false);
@@ -71,14 +133,28 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
                                      bool jacobian) {
   q_f_ = q_f;
   q_g_ = q_g;
+  // A charted side's coordinates are its chart's: no bound, measured against its size.
+  std::array<bool, 4> charted{};
+  Eigen::Vector4d size = hi_ - lo_;
+  for (int k = 0; k < 2; ++k) {
+    if (!charts_.side[k].valid()) continue;
+    charted[2 * k] = charted[2 * k + 1] = true;
+    size.segment<2>(2 * k).setConstant(charts_.side[k].length);
+  }
   bool clamped = false;
   for (int i = 0; i < 4; ++i) {
-    if (!periodic_[static_cast<size_t>(i)] && (u_[i] < lo_[i] || u_[i] > hi_[i])) clamped = true;
+    const size_t k = static_cast<size_t>(i);
+    if (!charted[k] && !periodic_[k] && (params_[i] < lo_[i] || params_[i] > hi_[i]))
+      clamped = true;
   }
-  u_ = internal::ClampOrWrap<4>(u_, lo_, hi_, periodic_);
+  params_ = internal::ClampOrWrap<4>(params_, lo_, hi_, periodic_);
+  for (int i = 0; i < 4; ++i) {
+    if (!charted[static_cast<size_t>(i)]) u_[i] = params_[i];
+  }
   const BodyPose pf = BodyPose::FromCoordinates(q_f);
   const BodyPose pg = BodyPose::FromCoordinates(q_g);
-  EvaluatePair(*f_, pf, *g_, pg, u_, &hint_f_, &hint_g_, &eval_, /*gradient_form=*/false);
+  EvaluatePairCharted(*f_, pf, *g_, pg, params_, charts_, &hint_f_, &hint_g_, &eval_,
+                      /*gradient_form=*/false);
   // Eigen's fixed-size 4 x 4 inverse (cofactors, vectorized) gives the corrector and the
   // determinant together, faster than an LU here; a matrix near singular is caught by the guard
   // below and by the closed form's conditioning test, so cofactor rounding is never relied on
@@ -106,7 +182,7 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
     bool any = false;
     for (int i = 0; i < 4; ++i) {
       active[static_cast<size_t>(i)] =
-          !periodic_[static_cast<size_t>(i)] &&
+          !charted[static_cast<size_t>(i)] && !periodic_[static_cast<size_t>(i)] &&
           ((u_[i] <= lo_[i] && delta[i] < 0) || (u_[i] >= hi_[i] && delta[i] > 0));
       any = any || active[static_cast<size_t>(i)];
     }
@@ -126,7 +202,7 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
       clamped = true;
     }
     if (!delta.allFinite() ||
-        delta.cwiseQuotient(hi_ - lo_).cwiseAbs().maxCoeff() > options_.max_correction ||
+        delta.cwiseQuotient(size).cwiseAbs().maxCoeff() > options_.max_correction ||
         (!any && residual_ > options_.max_residual)) {
       status_ = TrackStatus::kLost;
       return status_;
@@ -135,13 +211,21 @@ TrackStatus ContactTracker::Evaluate(const Vector7d& q_f, const Vector7d& q_g, b
     beta_ += n_g.dot(eval_.f.world.S_u * delta[0] + eval_.f.world.S_v * delta[1] -
                      eval_.g.world.S_u * delta[2] - eval_.g.world.S_v * delta[3]);
     u_ += delta;
-    u_ = internal::ClampOrWrap<4>(u_, lo_, hi_, periodic_);
+    if (!ToParameters()) {
+      status_ = TrackStatus::kLost;
+      return status_;
+    }
+    params_ = internal::ClampOrWrap<4>(params_, lo_, hi_, periodic_);
+    for (int i = 0; i < 4; ++i) {
+      if (!charted[static_cast<size_t>(i)]) u_[i] = params_[i];
+    }
   }
   if (jacobian && !ContactJacobianClosedForm(eval_, pf, pg, &u_q_)) {
     status_ = TrackStatus::kSingular;
     return status_;
   }
   status_ = clamped ? TrackStatus::kAtBoundary : TrackStatus::kTracked;
+  if (jacobian) SwitchCharts();
   return status_;
 }
 

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 
+#include "contact/charted_pair.h"
 #include "contact/contact_jacobian.h"
 #include "contact/extremal.h"
 
@@ -37,6 +38,12 @@ struct TrackerOptions {
 /// TrackerOptions::corrector_steps), and the closed-form u_q refreshed from the last evaluation.
 /// Holds pointers to the surfaces (which must outlive it) and fixed-size state only: Step()
 /// and Rebind() allocate nothing and never throw.
+///
+/// Next to a smooth pole a side is followed in the pole's tangent-plane chart (contact/
+/// pole_chart.h: taken within kChartEnter of the domain, left beyond kChartLeave): there its
+/// parameters are degenerate (u_q unbounded at the pole, the angle swinging half a turn as the
+/// point crosses it), while the chart is regular, so a contact is followed on, next to and
+/// across a pole like anywhere else.
 class ContactTracker {
  public:
   ContactTracker(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
@@ -51,10 +58,14 @@ class ContactTracker {
   /// One servo step to new poses.
   TrackStatus Step(const Vector7d& q_f, const Vector7d& q_g);
 
-  const Eigen::Vector4d& u() const { return u_; }
+  /// The pair's parameters (u, v, s, t).
+  const Eigen::Vector4d& u() const { return params_; }
   /// u_q at the last evaluated point (the predicted point of the last step): first-order
-  /// accurate at u(), which is what the next prediction needs.
+  /// accurate at u(), which is what the next prediction needs. A charted side's rows are its
+  /// chart coordinates' (charts()).
   const Matrix4x14& u_q() const { return u_q_; }
+  /// The sides followed in a pole's chart (for ExtremumAt at u()).
+  const PairCharts& charts() const { return charts_; }
   /// Signed distance at the last evaluated point, corrected to first order: β + β_u δ.
   double beta() const { return beta_; }
   double residual() const { return residual_; }
@@ -64,6 +75,11 @@ class ContactTracker {
   /// Evaluates at u_ (and corrects it when `correct`); `jacobian`: refresh u_q there.
   TrackStatus Evaluate(const Vector7d& q_f, const Vector7d& q_g, bool correct,
                        bool jacobian = true);
+  /// params_ from the coordinates u_ (through the charts' inverses); false when a charted
+  /// point has no parameters (it left its chart's reach).
+  bool ToParameters();
+  /// Takes or leaves each side's chart by the hysteresis bounds, converting u_ and u_q_.
+  void SwitchCharts();
 
   const nurbs::NurbsSurface* f_;
   const nurbs::NurbsSurface* g_;
@@ -71,7 +87,11 @@ class ContactTracker {
   Eigen::Vector4d lo_, hi_;
   std::array<bool, 4> periodic_{};
   Vector7d q_f_, q_g_;
+  /// The coordinates followed: a charted side's chart coordinates, the other's parameters.
   Eigen::Vector4d u_ = Eigen::Vector4d::Zero();
+  Eigen::Vector4d params_ = Eigen::Vector4d::Zero();
+  SurfacePoles poles_[2];
+  PairCharts charts_;
   Matrix4x14 u_q_ = Matrix4x14::Zero();
   nurbs::SpanHint hint_f_, hint_g_;
   SurfacePairEval eval_;

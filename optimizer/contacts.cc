@@ -70,7 +70,7 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
     st->track_status = st->tracker.Step(pf.q, pg.q);
     if (st->track_status == contact::TrackStatus::kTracked) {
       st->ext = contact::ExtremumAt(*f_, pf, *g_, pg, st->tracker.u(), tracking_.accept_residual,
-                                    &st->eval);
+                                    &st->eval, &st->tracker.charts());
       done = st->ext.status == contact::ExtremalStatus::kConverged;
     } else if (st->track_status == contact::TrackStatus::kLost) {
       ++st->lost;

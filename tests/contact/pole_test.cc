@@ -323,7 +323,7 @@ TEST(PoleTest, ABallsPoleTouchingAHolesWallKeepsItsFoot) {
     SurfacePairEval at;
     bool done = false;
     if (tracking && tracker.Step(fixed.q, q_ball) == TrackStatus::kTracked) {
-      e = ExtremumAt(wall, fixed, ball, ball_pose, tracker.u(), 1e-12, &at);
+      e = ExtremumAt(wall, fixed, ball, ball_pose, tracker.u(), 1e-12, &at, &tracker.charts());
       done = e.status == ExtremalStatus::kConverged;
     }
     if (!done) {
