@@ -11,7 +11,10 @@
 //                            [--peg-scene peg_in_hole_cad]  (the same parts imported from STEP,
 //                                                    issue 17's demo: its target is 1.5;
 //                                                    peg_in_hole_cad_bodies: the same with
-//                                                    contact declared between the bodies)
+//                                                    contact declared between the bodies;
+//                                                    peg_in_hole_poles_on_axis: the end
+//                                                    sphere's poles on the axis, where the
+//                                                    plate and floor touch it, issue 34)
 //                            [--target R]            (the p99 ratio to meet; default 1, or 1.5
 //                                                    for the peg_in_hole_cad scenes)
 
@@ -30,6 +33,7 @@
 #include "server/phantom.h"
 #include "server/servo.h"
 #include "testing/drag_path.h"
+#include "testing/peg_variants.h"
 
 using namespace tangent::server;
 
@@ -47,7 +51,9 @@ struct Run {
   TickResult r;
 
   explicit Run(const std::string& name)
-      : scene(LoadScene(std::string(TANGENT_SCENES_DIR) + "/" + name + ".json")) {
+      : scene(name == "peg_in_hole_poles_on_axis"
+                  ? tangent::testing::PegWithPolesOnAxis(TANGENT_SCENES_DIR)
+                  : LoadScene(std::string(TANGENT_SCENES_DIR) + "/" + name + ".json")) {
     servo = std::make_unique<ServoLoop>(*scene, ServoOptions{});
     link = std::make_unique<GlobalLink>(*servo);
   }
