@@ -456,7 +456,10 @@ double ParameterDistance(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface
 bool FoundAnotherExtremum(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
                           const Eigen::Vector4d& from, const SurfaceSurfaceExtremum& solved,
                           double held_distance) {
-  return ParameterDistance(f, g, from, solved.u) > kMaxResolveJump && solved.beta > held_distance;
+  // (Farther by more than rounding: on a pole the same point has any angle, and a touching pair's
+  // β and |d| there differ by ~1e-19 m either way.)
+  return ParameterDistance(f, g, from, solved.u) > kMaxResolveJump &&
+         solved.beta > held_distance + kSamePointDistance;
 }
 
 SurfaceSurfaceExtremum ExtremumAt(const nurbs::NurbsSurface& f, const BodyPose& pose_f,

@@ -137,6 +137,9 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
 double ParameterDistance(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
                          const Eigen::Vector4d& x, const Eigen::Vector4d& y);
 
+/// Distances closer than this (m) are one point's: the rounding of |d| for parts of metres.
+inline constexpr double kSamePointDistance = 1e-15;
+
 /// A full solve from a tracked contact's parameters that ends farther than this (a fraction of
 /// a domain, ParameterDistance) has left the contact's neighbourhood: the tracker's own bound on
 /// one correction (TrackerOptions::max_correction).

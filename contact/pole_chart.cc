@@ -21,8 +21,9 @@ constexpr double kLimitRho = 1e-8;
 // Newton's matrix and the Hessian's u-terms, where an O(ρ) error keeps Newton contracting by
 // that factor per step.
 constexpr double kSecondOrderRho = 1e-4;
-// Chart coordinates this near the pole (a fraction of PoleChart::length) are the pole itself.
-constexpr double kPoleSnap = 1e-14;
+// Chart coordinates this near the pole (in units of eps (|P| + PoleChart::length)) are the pole
+// itself.
+constexpr double kPoleSnap = 1024.0;
 // Samples of the row's departure directions, for the inverse's starting angle.
 constexpr int kStartAngles = 32;
 
@@ -221,10 +222,12 @@ bool ChartParameters(const nurbs::NurbsSurface& s, const PoleChart& c, const Eig
   };
   double a = guess[1 - c.across];
   Eigen::Vector2d t = departure(a);
-  // On the pole to within kPoleSnap of the surface's size the angle is rounding noise (T(S − P)
-  // carries ~eps |P|): the guess's angle is kept, so a point resting on the pole does not swing
-  // round it from one solve to the next. The point is then off by at most 2 r along the plane.
-  if (!(r > kPoleSnap * c.length)) {
+  // So near the pole the angle is rounding noise (T(S − P) carries ~eps |P|, so the angle ~eps
+  // |P| / r: 1e-3 rad at the snap radius): the guess's angle is kept, so a point resting on the
+  // pole does not swing round it from one solve to the next. The point is then off by at most
+  // 2 r along the plane (1e-14 m for a 5 mm sphere).
+  const double snap = kPoleSnap * std::numeric_limits<double>::epsilon() * (c.P.norm() + c.length);
+  if (!(r > snap)) {
     *uv = Params(c, a, r / t.norm());
     return true;
   }
