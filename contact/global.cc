@@ -11,6 +11,7 @@
 #include <string>
 
 #include "contact/box_newton.h"
+#include "contact/global_minima.h"
 #include "contact/offset_chunks.h"
 #include "contact/relative_curvature.h"
 #include "contact/trimmed.h"
@@ -37,13 +38,12 @@ const char* ToString(ContactEvent::Reason r) {
 
 namespace {
 
+using internal::AddFound;
+using internal::MinimaBeside;
+using internal::SamePoints;
+using internal::WorldBox;
+
 // World box of a surface-frame box (centre c, half extents h) under pose p: exact for the box.
-struct WorldBox {
-  Eigen::Vector3d lo, hi;
-  bool Overlaps(const WorldBox& o) const {
-    return (lo.array() <= o.hi.array()).all() && (o.lo.array() <= hi.array()).all();
-  }
-};
 WorldBox Place(const BodyPose& p, const Eigen::Vector3d& c, const Eigen::Vector3d& h) {
   const Eigen::Vector3d x = p.Point(c);
   const Eigen::Vector3d e = p.R_WB.cwiseAbs() * h;
@@ -212,6 +212,8 @@ struct GlobalContactStage::Impl {
   // contacts first, then clusters) and the offset-triangle pairs of the narrow phase.
   std::vector<Seed> accepted;
   std::vector<std::pair<int, int>> triangle_pairs;
+  // The surface pairs whose offsets crossed this pass (FindNested skips them).
+  std::vector<std::pair<int, int>> crossed;
   int n = 0, pass = 0;
   bool Allowed(int a, int b) const {
     const int ba = watched[static_cast<size_t>(a)].s.body,
@@ -582,16 +584,6 @@ size_t ClusterSeeds(GlobalContactStage::Impl& m, const GlobalOptions& options, i
 // carries and stops short of a point one Newton step would move by more than ~1e-18.
 constexpr double kTrackedResidual = 1e-9;
 
-// Two contacts on the same points (m): far below any two distinct extrema a pass tells apart,
-// far above the solves' rounding (1e-15 of a part's size) and the servo's tracking error
-// (~1e-10 m).
-constexpr double kSamePoint = 1e-8;
-
-bool SamePoints(const GlobalContact& x, const GlobalContact& y) {
-  return x.a == y.a && x.b == y.b && (x.p_a - y.p_a).norm() < kSamePoint &&
-         (x.p_b - y.p_b).norm() < kSamePoint;
-}
-
 // What a face extremum e of surfaces a, b stands for when either is trimmed: itself while its
 // points lie on both materials, else the edge contact of the first surface it leaves
 // (contact/trimmed.h), with that edge's distance and points in (a, b) order.
@@ -630,62 +622,6 @@ bool HeldOnMaterialBorder(const Watched& wa, const Watched& wb, const SurfaceSur
     if (e.at_bound[static_cast<size_t>(i)] && !(i < 2 ? wa.edges : wb.edges)) return false;
   }
   return true;
-}
-
-// The minima beside a saddle of the distance (relative_curvature.h): the surfaces cross along
-// the eigenvector w of M's negative eigenvalue, so a minimum (the deepest point of the crossing,
-// or the nearest of a near miss) lies on each side of the saddle along w. Newton from a seed
-// beside the saddle is drawn back to it (the nearest critical point), so each side first walks
-// f's point along w, in steps growing from 1 % of the curvature radius 1/max|λ|, while its
-// signed distance to g (a point–surface solve) keeps falling; Newton from the lowest point
-// then lands in the minimum's basin. A result that converges to a minimum (not itself crossing)
-// on that side, facing and within the activation and penetration bounds, is appended to *out
-// unless already there.
-void MinimaBeside(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
-                  const nurbs::NurbsSurface& g, const BodyPose& pose_g,
-                  const SurfaceSurfaceExtremum& saddle, const SurfacePairEval& at,
-                  const RelativeCurvature& rc, const GlobalOptions& options, int a, int b,
-                  std::vector<GlobalContact>* out) {
-  const double radius = 1.0 / std::max(rc.eigenvalues.cwiseAbs().maxCoeff(), 1e-300);
-  const Eigen::Vector4d step = ParameterStepAlong(at, rc.min_direction);
-  if (!step.allFinite()) return;
-  Eigen::Vector4d lo, hi;
-  lo << f.knots_u().domain_begin(), f.knots_v().domain_begin(), g.knots_u().domain_begin(),
-      g.knots_v().domain_begin();
-  hi << f.knots_u().domain_end(), f.knots_v().domain_end(), g.knots_u().domain_end(),
-      g.knots_v().domain_end();
-  const std::array<bool, 4> periodic = {f.periodic_u(), f.periodic_v(), g.periodic_u(),
-                                        g.periodic_v()};
-  for (const double side : {1.0, -1.0}) {
-    // Walk: ξ = 1 %, 2 %, 4 % ... of the radius (up to 2 radii) while the distance falls.
-    Eigen::Vector4d best = saddle.u;
-    double best_distance = saddle.beta;
-    for (double xi = 0.01 * radius; xi <= 2.0 * radius; xi *= 2.0) {
-      const Eigen::Vector4d x =
-          internal::ClampOrWrap<4>(saddle.u + side * xi * step, lo, hi, periodic);
-      const Eigen::Vector3d p_W = pose_f.Point(f.Evaluate(x[0], x[1], 0).S);
-      const PointSurfaceExtremum q = SolvePointSurface(p_W, g, pose_g, x.tail<2>());
-      if (q.status != ExtremalStatus::kConverged || !(q.distance < best_distance)) break;
-      best << x.head<2>(), q.u;
-      best_distance = q.distance;
-    }
-    if (best == saddle.u) continue;
-    SurfacePairEval q;
-    const SurfaceSurfaceExtremum e =
-        SolveSurfaceSurface(f, pose_f, g, pose_g, best, kContinuation, &q);
-    if (e.status != ExtremalStatus::kConverged || !(e.alignment < 0.0) ||
-        !(e.beta < options.activation) || !(e.beta > -options.max_penetration) ||
-        side * (e.p_g - saddle.p_g).dot(rc.min_direction) < kSamePoint) {
-      continue;
-    }
-    const RelativeCurvature k = RelativeCurvatureOf(q);
-    if (!k.valid || k.crossing) continue;
-    const GlobalContact c{a, b, e.u, e.beta, e.p_f, e.p_g};
-    if (std::none_of(out->begin(), out->end(),
-                     [&](const GlobalContact& o) { return SamePoints(o, c); })) {
-      out->push_back(c);
-    }
-  }
 }
 
 // Refines each new cluster m.accepted[n_tracked...] by the extremal Newton solver: from the mean
@@ -741,11 +677,7 @@ void RefineClusters(const GlobalContactStage::Impl& m, const GlobalOptions& opti
       MinimaBeside(*wa.s.surface, pa, *wb.s.surface, pb, e, at, rc, options, a, b, found);
       continue;
     }
-    const GlobalContact c{a, b, e.u, on.beta, on.p_a, on.p_b};
-    if (std::none_of(found->begin(), found->end(),
-                     [&](const GlobalContact& f) { return SamePoints(f, c); })) {
-      found->push_back(c);
-    }
+    AddFound({a, b, e.u, on.beta, on.p_a, on.p_b}, found);
   }
 }
 
@@ -763,6 +695,27 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
   NarrowPhase(m, options_, a, b, first, last, pa, pb, tracked, st);
   const size_t n_tracked = ClusterSeeds(m, options_, a, b, pa, pb, tracked, domains, st);
   RefineClusters(m, options_, a, b, n_tracked, pa, pb, domains, st, &found_);
+  if (!m.triangle_pairs.empty()) m.crossed.emplace_back(a, b);
+}
+
+void GlobalContactStage::FindNested(const std::vector<BodyPose>& poses,
+                                    const std::vector<GlobalContact>& tracked, GlobalStats* st) {
+  Impl& m = *impl_;
+  for (const auto& [a, b] : m.surface_pairs) {
+    const Watched& wa = m.watched[static_cast<size_t>(a)];
+    const Watched& wb = m.watched[static_cast<size_t>(b)];
+    if (wa.edges || wb.edges ||
+        std::find(m.crossed.begin(), m.crossed.end(), std::make_pair(a, b)) != m.crossed.end() ||
+        std::any_of(tracked.begin(), tracked.end(),
+                    [&](const GlobalContact& c) { return c.a == a && c.b == b; })) {
+      continue;
+    }
+    const BodyPose& pa = poses[static_cast<size_t>(wa.s.body)];
+    const BodyPose& pb = poses[static_cast<size_t>(wb.s.body)];
+    if (!Place(pa, wa.centre, wa.half).MostlyShares(Place(pb, wb.centre, wb.half))) continue;
+    ++st->seeds_refined;
+    internal::NestedPairMinimum(*wa.s.surface, pa, *wb.s.surface, pb, options_, a, b, &found_);
+  }
 }
 
 void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
@@ -867,6 +820,7 @@ void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
   GlobalStats st;
   events->clear();
   found_.clear();
+  m.crossed.clear();
   ++m.pass;
   BroadPhase(poses, &st);
   // Candidates are grouped by surface pair (a, b): one FindContacts per pair.
@@ -879,6 +833,7 @@ void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
     FindContacts(a, b, first, last, poses, tracked, &st);
     first = last;
   }
+  FindNested(poses, tracked, &st);
   st.found = static_cast<int>(found_.size());
   Events(poses, tracked, events);
   std::sort(found_.begin(), found_.end(), [](const GlobalContact& x, const GlobalContact& y) {

@@ -138,6 +138,12 @@ class GlobalContactStage {
   /// clustered outside the spheres of neglect, clusters refined into contacts (found_).
   void FindContacts(int a, int b, size_t first, size_t last, const std::vector<BodyPose>& poses,
                     const std::vector<GlobalContact>& tracked, GlobalStats* st);
+  /// 4b. Nested pairs: the surface pairs the broad phase reported whose offsets did not cross,
+  /// with nothing tracked, and whose boxes mostly share their space (a ball in a socket, a rod
+  /// along a groove: offsets that contain one another never cross), solved from their samples
+  /// (contact/global_minima.h).
+  void FindNested(const std::vector<BodyPose>& poses, const std::vector<GlobalContact>& tracked,
+                  GlobalStats* st);
   /// 5. Events with hysteresis: tracked contacts re-solved (removals; a saddle split into the
   /// minima beside it, two at one point merged), found ones added.
   void Events(const std::vector<BodyPose>& poses, const std::vector<GlobalContact>& tracked,

@@ -16,6 +16,7 @@
 #include "server/global_link.h"
 #include "server/phantom.h"
 #include "server/servo.h"
+#include "testing/conformal_scenes.h"
 #include "testing/contact_scenes.h"
 #include "testing/drag_path.h"
 
@@ -333,6 +334,7 @@ struct ServoSpec {
   double seconds = 2.0;
   Outcome expected = Outcome::kConverged;
   std::string note;
+  server::ServoOptions options = {};
 };
 
 StabilityRow RunServo(const ServoSpec& c) {
@@ -345,7 +347,7 @@ StabilityRow RunServo(const ServoSpec& c) {
   row.note = c.note;
   const std::unique_ptr<server::Scene> scene = c.scene();
   row.max_force = scene->device.max_force;
-  server::ServoLoop servo(*scene, server::ServoOptions{});
+  server::ServoLoop servo(*scene, c.options);
   server::GlobalLink link(servo);
   server::TickResult r;
   server::Snapshot snap;
@@ -377,8 +379,8 @@ StabilityRow RunServo(const ServoSpec& c) {
       if (last_ns > 0) {
         const double dt =
             std::min(1e-9 * static_cast<double>(now - last_ns), 2.0 / scene->device.device_rate);
-        row.step_ratio =
-            std::max(row.step_ratio, (f - last_f).norm() / (scene->device.max_force_rate * dt));
+        const double ratio = (f - last_f).norm() / (scene->device.max_force_rate * dt);
+        row.step_ratio = std::max(row.step_ratio, ratio);
       }
       last_f = f;
       last_ns = now;
@@ -480,6 +482,30 @@ std::vector<ServoSpec> ServoSpecs(const std::string& scenes_dir, double seconds)
                      load("peg_in_hole"), [path](double t) { return path->At(10.0 * t); }, seconds,
                      Outcome::kConverged, "face → edge → wall contacts"});
   }
+  // Issue 33's canonical conformal contacts (testing/conformal_scenes.h), pressed 2 mm within
+  // half a second and then moved (tests/server/conformal_test.cc checks their forces).
+  auto press = [](double t) { return -2e-3 * std::min(1.0, 2.0 * t); };
+  {
+    ServoSpec groove{"conformal contact",
+                     "rod in a 1 % larger groove, pressed and slid",
+                     [] { return server::ParseScene(kGrooveScene, "groove"); },
+                     [press](double t) {
+                       return Eigen::Vector3d(t > 0.5 ? 5e-3 * std::sin(3.0 * (t - 0.5)) : 0.0, 0,
+                                              press(t));
+                     },
+                     seconds,
+                     Outcome::kConverged,
+                     "a line contact: three sections"};
+    groove.options.line_contacts = true;
+    specs.push_back(std::move(groove));
+  }
+  specs.push_back({"conformal contact", "ball in a 1 % larger socket, pressed and pushed round",
+                   [] { return server::ParseScene(kSocketScene, "socket"); },
+                   [press](double t) {
+                     const double a = 2 * std::numbers::pi * t, r = t > 0.5 ? 3e-3 : 0.0;
+                     return Eigen::Vector3d(r * std::cos(a), r * std::sin(a), press(t));
+                   },
+                   seconds, Outcome::kConverged, "a patch contact, found nested, on two poles"});
   return specs;
 }
 

@@ -472,5 +472,66 @@ TEST(GlobalTest, ATrimmedPlateIsTouchedOnlyOnItsMaterialAndAtItsRim) {
   EXPECT_TRUE(events.empty());
 }
 
+// Issue 33: nested pairs. A 5 mm ball resting in a 5.05 mm socket, and a 5 mm rod lying in a
+// 5.05 mm groove: their offsets contain one another and cross nowhere, so the narrow phase finds
+// no triangles. The stage solves such a pair from its samples (FindNested): the ball's contact
+// is found at rest, the rod's too (with accept_continuum, as line contacts run it), and nothing
+// for a smaller ball nested beyond the activation distance. Without FindNested none is found.
+TEST(GlobalTest, NestedPairsAreFoundAtRest) {
+  const nurbs::NurbsSurface socket = nurbs::ReversedU(nurbs::MakeSphere({0, 0, 0}, 5.05 * mm));
+  const nurbs::NurbsSurface ball = nurbs::MakeSphere({0, 0, 0}, 5 * mm);
+  const nurbs::OffsetMesh socket_mesh = nurbs::MakeOffsetMesh(socket, 20e-6, 0.25e-3, 0.5e-3);
+  const nurbs::OffsetMesh ball_mesh = nurbs::MakeOffsetMesh(ball, 20e-6, 0.25e-3, 0.5e-3);
+  GlobalOptions options;
+  options.neglect_radius = 6 * mm;
+  GlobalContactStage stage({{0, &socket, &socket_mesh, nullptr}, {1, &ball, &ball_mesh, nullptr}},
+                           {{0, 1}}, options);
+  auto at = [](const Eigen::Vector3d& c) {
+    return BodyPose::FromCoordinates(testing::Coordinates(c, Eigen::Quaterniond::Identity()));
+  };
+  const BodyPose ground = at(Eigen::Vector3d::Zero());
+  std::vector<ContactEvent> events;
+  GlobalStats stats;
+  for (const Eigen::Vector3d& rest :
+       {Eigen::Vector3d(0, 0, -0.05 * mm), Eigen::Vector3d(0.03 * mm, 0, -0.04 * mm)}) {
+    stage.Run({ground, at(rest)}, {}, &events, &stats);
+    EXPECT_EQ(stats.triangle_pairs, 0);  // nothing crosses
+    ASSERT_EQ(stage.found().size(), 1u);
+    ASSERT_EQ(events.size(), 1u);
+    EXPECT_EQ(events[0].kind, ContactEvent::Kind::kAdded);
+    EXPECT_NEAR(stage.found()[0].beta, 0.0, 1e-15);
+    // The ball touches where its centre is off the socket's, on that side.
+    const Eigen::Vector3d expected = rest + 5 * mm * rest.normalized();
+    EXPECT_LT((stage.found()[0].p_b - expected).norm(), 1e-9);
+  }
+  // A 4.7 mm ball 0.1 mm off the socket's centre: 0.25 mm apart at the nearest, beyond the
+  // activation (0.1 mm), and still nested (the offsets, 0.27 mm each, overlap all round): nothing.
+  const nurbs::NurbsSurface small = nurbs::MakeSphere({0, 0, 0}, 4.7 * mm);
+  const nurbs::OffsetMesh small_mesh = nurbs::MakeOffsetMesh(small, 20e-6, 0.25e-3, 0.5e-3);
+  GlobalContactStage apart({{0, &socket, &socket_mesh, nullptr}, {1, &small, &small_mesh, nullptr}},
+                           {{0, 1}}, options);
+  apart.Run({ground, at({0, 0, -0.1 * mm})}, {}, &events, &stats);
+  EXPECT_EQ(stats.triangle_pairs, 0);
+  EXPECT_TRUE(apart.found().empty());
+  EXPECT_TRUE(events.empty());
+
+  // The rod along the groove: a continuum, taken only with accept_continuum.
+  const Eigen::Quaterniond along_x(0.7071067811865476, 0, 0.7071067811865476, 0);
+  const nurbs::NurbsSurface groove = nurbs::ReversedU(nurbs::MakeCylinder(5.05 * mm, 40 * mm));
+  const nurbs::NurbsSurface rod = nurbs::MakeCylinder(5 * mm, 20 * mm);
+  const nurbs::OffsetMesh groove_mesh = nurbs::MakeOffsetMesh(groove, 20e-6, 0.25e-3, 0.5e-3);
+  const nurbs::OffsetMesh rod_mesh = nurbs::MakeOffsetMesh(rod, 20e-6, 0.25e-3, 0.5e-3);
+  const BodyPose block = BodyPose::FromCoordinates(testing::Coordinates({-20 * mm, 0, 0}, along_x));
+  const BodyPose lying =
+      BodyPose::FromCoordinates(testing::Coordinates({-10 * mm, 0, -0.05 * mm}, along_x));
+  options.accept_continuum = true;
+  GlobalContactStage line({{0, &groove, &groove_mesh, nullptr}, {1, &rod, &rod_mesh, nullptr}},
+                          {{0, 1}}, options);
+  line.Run({block, lying}, {}, &events, &stats);
+  EXPECT_EQ(stats.triangle_pairs, 0);
+  ASSERT_EQ(line.found().size(), 1u);
+  EXPECT_NEAR(line.found()[0].beta, 0.0, 1e-15);
+}
+
 }  // namespace
 }  // namespace tangent::contact

@@ -1,0 +1,86 @@
+#include "contact/global_minima.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "contact/box_newton.h"
+
+namespace tangent::contact::internal {
+
+bool SamePoints(const GlobalContact& x, const GlobalContact& y) {
+  return x.a == y.a && x.b == y.b && (x.p_a - y.p_a).norm() < kSamePoint &&
+         (x.p_b - y.p_b).norm() < kSamePoint;
+}
+
+void AddFound(const GlobalContact& c, std::vector<GlobalContact>* out) {
+  if (std::none_of(out->begin(), out->end(),
+                   [&](const GlobalContact& o) { return SamePoints(o, c); })) {
+    out->push_back(c);
+  }
+}
+
+void MinimaBeside(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                  const nurbs::NurbsSurface& g, const BodyPose& pose_g,
+                  const SurfaceSurfaceExtremum& saddle, const SurfacePairEval& at,
+                  const RelativeCurvature& rc, const GlobalOptions& options, int a, int b,
+                  std::vector<GlobalContact>* out) {
+  const double radius = 1.0 / std::max(rc.eigenvalues.cwiseAbs().maxCoeff(), 1e-300);
+  const Eigen::Vector4d step = ParameterStepAlong(at, rc.min_direction);
+  if (!step.allFinite()) return;
+  Eigen::Vector4d lo, hi;
+  lo << f.knots_u().domain_begin(), f.knots_v().domain_begin(), g.knots_u().domain_begin(),
+      g.knots_v().domain_begin();
+  hi << f.knots_u().domain_end(), f.knots_v().domain_end(), g.knots_u().domain_end(),
+      g.knots_v().domain_end();
+  const std::array<bool, 4> periodic = {f.periodic_u(), f.periodic_v(), g.periodic_u(),
+                                        g.periodic_v()};
+  for (const double side : {1.0, -1.0}) {
+    // Walk: ξ = 1 %, 2 %, 4 % ... of the radius (up to 2 radii) while the distance falls.
+    Eigen::Vector4d best = saddle.u;
+    double best_distance = saddle.beta;
+    for (double xi = 0.01 * radius; xi <= 2.0 * radius; xi *= 2.0) {
+      const Eigen::Vector4d x =
+          internal::ClampOrWrap<4>(saddle.u + side * xi * step, lo, hi, periodic);
+      const Eigen::Vector3d p_W = pose_f.Point(f.Evaluate(x[0], x[1], 0).S);
+      const PointSurfaceExtremum q = SolvePointSurface(p_W, g, pose_g, x.tail<2>());
+      if (q.status != ExtremalStatus::kConverged || !(q.distance < best_distance)) break;
+      best << x.head<2>(), q.u;
+      best_distance = q.distance;
+    }
+    if (best == saddle.u) continue;
+    SurfacePairEval q;
+    const SurfaceSurfaceExtremum e =
+        SolveSurfaceSurface(f, pose_f, g, pose_g, best, kContinuation, &q);
+    if (e.status != ExtremalStatus::kConverged || !(e.alignment < 0.0) ||
+        !(e.beta < options.activation) || !(e.beta > -options.max_penetration) ||
+        side * (e.p_g - saddle.p_g).dot(rc.min_direction) < kSamePoint) {
+      continue;
+    }
+    const RelativeCurvature k = RelativeCurvatureOf(q);
+    if (!k.valid || k.crossing) continue;
+    AddFound({a, b, e.u, e.beta, e.p_f, e.p_g}, out);
+  }
+}
+
+void NestedPairMinimum(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                       const nurbs::NurbsSurface& g, const BodyPose& pose_g,
+                       const GlobalOptions& options, int a, int b,
+                       std::vector<GlobalContact>* out) {
+  const Eigen::Vector4d seed = ClosestSamplePair(f, pose_f, g, pose_g, 4);
+  SurfacePairEval at;
+  const SurfaceSurfaceExtremum e = SolveSurfaceSurface(f, pose_f, g, pose_g, seed, {}, &at);
+  const bool taken = (e.status == ExtremalStatus::kConverged ||
+                      (options.accept_continuum && e.status == ExtremalStatus::kSingular)) &&
+                     e.beta < options.activation && e.beta > -options.max_penetration &&
+                     e.alignment < 0.0;
+  if (!taken) return;
+  if (const RelativeCurvature rc = RelativeCurvatureOf(at);
+      e.status == ExtremalStatus::kConverged && rc.crossing) {
+    MinimaBeside(f, pose_f, g, pose_g, e, at, rc, options, a, b, out);
+    return;
+  }
+  AddFound({a, b, e.u, e.beta, e.p_f, e.p_g}, out);
+}
+
+}  // namespace tangent::contact::internal

@@ -1,0 +1,61 @@
+#pragma once
+
+// Issue 33's canonical conformal contacts as scenes (tests/server/conformal_test.cc, the
+// stability suite): pairs whose surfaces nearly coincide over a line or a patch.
+
+namespace tangent::testing {
+
+// The groove: a cylinder of radius 5.05 mm facing its axis, 40 mm along x; the rod: radius
+// 5 mm, 20 mm long, lying on the groove's bottom line (0.05 mm below the groove's axis).
+//
+// In both scenes the surfaces' offsets overlap far from the contact: about √(4 r R) round it
+// (r the offset, 0.27 mm; R the relative curvature radius, 1/(1/5 − 1/5.05) = 505 mm), 23 mm,
+// the whole part. Spheres of neglect of 6 mm (their far reach 24 mm) keep the global stage from
+// testing every block of both parts round a tracked contact (docs/trimming.md, "Peg in hole").
+inline constexpr const char* kGrooveScene = R"JSON({
+  "name": "rod in a groove",
+  "length_unit": "mm",
+  "bodies": [
+    {"name": "block", "fixed": true},
+    {"name": "rod", "position": [0, 0, -0.05], "mass": 0.01, "inertia": [8e-07, 8e-07, 1e-07]}
+  ],
+  "surfaces": [
+    {"name": "groove", "body": "block", "type": "cylinder", "radius": 5.05, "height": 40,
+     "position": [-20, 0, 0], "quaternion": [0.7071067811865476, 0, 0.7071067811865476, 0],
+     "reverse_normal": true},
+    {"name": "rod_side", "body": "rod", "type": "cylinder", "radius": 5, "height": 20,
+     "position": [-10, 0, 0], "quaternion": [0.7071067811865476, 0, 0.7071067811865476, 0]}
+  ],
+  "contacts": [{"a": "groove", "b": "rod_side", "kind": "unilateral", "max_contacts": 2}],
+  "grasp": {"body": "rod", "point": [0, 0, 0], "hold_orientation": 0.01},
+  "device": {"id": 1, "scale": 1.0, "stiffness": 300, "damping": 1.0, "max_force": 3.3,
+             "max_force_rate": 500, "ramp_time": 1.0},
+  "offset": {"tolerance": 0.02, "margin": 0.25},
+  "global_stage": {"neglect_radius": 6}
+})JSON";
+
+// A ball of radius 5 mm in a spherical socket of 5.05 mm, resting at its bottom: a patch contact
+// (the relative curvature 1/5 − 1/5.05 per mm is small in every direction but not zero, so one
+// extremal point holds it). Both spheres have their poles at the bottom, where they touch: the
+// contact starts on two poles, and the ball's point crosses its pole when it turns
+// (docs/contact.md, "Pole charts").
+inline constexpr const char* kSocketScene = R"JSON({
+  "name": "ball in a socket",
+  "length_unit": "mm",
+  "bodies": [
+    {"name": "block", "fixed": true},
+    {"name": "ball", "position": [0, 0, -0.05], "mass": 0.01, "inertia": [1e-07, 1e-07, 1e-07]}
+  ],
+  "surfaces": [
+    {"name": "socket", "body": "block", "type": "sphere", "radius": 5.05, "reverse_normal": true},
+    {"name": "ball_surface", "body": "ball", "type": "sphere", "radius": 5}
+  ],
+  "contacts": [{"a": "socket", "b": "ball_surface", "kind": "unilateral", "max_contacts": 2}],
+  "grasp": {"body": "ball", "point": [0, 0, 0], "hold_orientation": 0.01},
+  "device": {"id": 1, "scale": 1.0, "stiffness": 300, "damping": 1.0, "max_force": 3.3,
+             "max_force_rate": 500, "ramp_time": 1.0},
+  "offset": {"tolerance": 0.02, "margin": 0.25},
+  "global_stage": {"neglect_radius": 6}
+})JSON";
+
+}  // namespace tangent::testing
