@@ -137,8 +137,9 @@ struct SocketOutcome {
   int solves = 0, tracked = 0;
 };
 
-// 1 kHz device states, four servo ticks each. From 1 s the hand presses 2 mm down; from 3 s it turns ±60° about x; from 5 s it pushes round
-// a 3 mm circle in the horizontal plane, still 2 mm down.
+// 1 kHz device states, four servo ticks each. From 1 s the hand presses 2 mm down; from 3 s it
+// turns ±60° about x; from 5 s it pushes round a 3 mm circle in the horizontal plane, still 2 mm
+// down.
 SocketOutcome DriveSocket() {
   auto scene = ParseScene(testing::kSocketScene, "socket.json");
   ServoOptions options;
