@@ -56,13 +56,9 @@ bool SolveInCharts(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                    SurfaceSurfaceExtremum* out, SurfacePairEval* at_solution) {
   if (!charts.any()) return false;
   const nurbs::NurbsSurface* surface[2] = {&f, &g};
-  Eigen::Vector4d lo, hi;
-  lo << f.knots_u().domain_begin(), f.knots_v().domain_begin(), g.knots_u().domain_begin(),
-      g.knots_v().domain_begin();
-  hi << f.knots_u().domain_end(), f.knots_v().domain_end(), g.knots_u().domain_end(),
-      g.knots_v().domain_end();
-  const std::array<bool, 4> periodic = {f.periodic_u(), f.periodic_v(), g.periodic_u(),
-                                        g.periodic_v()};
+  const internal::PairBox box = internal::PairBoxOf(f, g);
+  const Eigen::Vector4d &lo = box.lo, &hi = box.hi;
+  const std::array<bool, 4>& periodic = box.periodic;
   nurbs::SpanHint hint[2];
   Eigen::Vector4d u = internal::ClampOrWrap<4>(seed, lo, hi, periodic);
   // The unknowns: each charted side's chart coordinates, the other's parameters; and the size

@@ -294,10 +294,8 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
                                            const ExtremalOptions& options,
                                            SurfacePairEval* at_solution) {
   if (!seed.allFinite() || !FinitePose(pose_f) || !FinitePose(pose_g)) {
-    Eigen::Vector4d lo, hi;
-    lo << Lo(f), Lo(g);
-    hi << Hi(f), Hi(g);
-    auto out = InvalidExtremum<SurfaceSurfaceExtremum, 4>(SaneSeed<4>(seed, lo, hi));
+    const internal::PairBox box = internal::PairBoxOf(f, g);
+    auto out = InvalidExtremum<SurfaceSurfaceExtremum, 4>(SaneSeed<4>(seed, box.lo, box.hi));
     out.beta = std::numeric_limits<double>::infinity();
     out.p_g.setZero();
     out.n_g = Eigen::Vector3d::UnitZ();
@@ -332,11 +330,11 @@ SurfaceSurfaceExtremum SolveSurfaceSurface(const nurbs::NurbsSurface& f, const B
     s->penetrating = e.d.dot(e.g.N_W) < 0.0 && e.d.dot(e.f.N_W) > 0.0;
     s->touching = Touching(e, s->classify_scale, f, g, x);
   };
-  Eigen::Vector4d lo, hi;
-  lo << Lo(f), Lo(g);
-  hi << Hi(f), Hi(g);
+  const internal::PairBox box = internal::PairBoxOf(f, g);
+  const Eigen::Vector4d& lo = box.lo;
+  const Eigen::Vector4d& hi = box.hi;
   auto opt = BoxOptionsOf<4>(options);
-  opt.periodic = {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()};
+  opt.periodic = box.periodic;
   auto pole = [&](const Eigen::Vector4d& x, Eigen::Vector4d* y) {
     for (int side = 0; side < 2; ++side) {
       const nurbs::NurbsSurface& s = side == 0 ? f : g;
@@ -492,11 +490,8 @@ SurfaceSurfaceExtremum ExtremumAt(const nurbs::NurbsSurface& f, const BodyPose& 
 
 Eigen::Vector4d IntoPairDomain(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g,
                                const Eigen::Vector4d& u) {
-  Eigen::Vector4d lo, hi;
-  lo << Lo(f), Lo(g);
-  hi << Hi(f), Hi(g);
-  return internal::ClampOrWrap<4>(u, lo, hi,
-                                  {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()});
+  const internal::PairBox box = internal::PairBoxOf(f, g);
+  return internal::ClampOrWrap<4>(u, box.lo, box.hi, box.periodic);
 }
 
 }  // namespace tangent::contact

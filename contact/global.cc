@@ -14,6 +14,7 @@
 #include "contact/global_minima.h"
 #include "contact/offset_chunks.h"
 #include "contact/relative_curvature.h"
+#include "contact/solver_inputs.h"
 #include "contact/trimmed.h"
 
 namespace tangent::contact {
@@ -150,10 +151,7 @@ Eigen::Vector2d ParametersAt(const Watched& w, const BodyPose& pose, int t,
 }
 
 // Domain bounds and periodicity of a pair's four parameters.
-struct Box {
-  Eigen::Vector4d lo, hi;
-  std::array<bool, 4> periodic;
-};
+using Box = internal::PairBox;
 
 void AddToCluster(const Eigen::Vector4d& u, const Box& box, Seed* c) {
   for (int i = 0; i < 4; ++i) {
@@ -475,17 +473,6 @@ void GlobalContactStage::BroadPhase(const std::vector<BodyPose>& poses, GlobalSt
 
 namespace {
 
-// The parameter box (u, v, s, t) of a pair of surfaces.
-Box PairDomains(const nurbs::NurbsSurface& fa, const nurbs::NurbsSurface& fb) {
-  Box domains;
-  domains.lo << fa.knots_u().domain_begin(), fa.knots_v().domain_begin(),
-      fb.knots_u().domain_begin(), fb.knots_v().domain_begin();
-  domains.hi << fa.knots_u().domain_end(), fa.knots_v().domain_end(), fb.knots_u().domain_end(),
-      fb.knots_v().domain_end();
-  domains.periodic = {fa.periodic_u(), fa.periodic_v(), fb.periodic_u(), fb.periodic_v()};
-  return domains;
-}
-
 // Narrow phase on the chunk pairs candidates[first, last) of surfaces a, b whose boxes overlap:
 // the intersecting offset triangles (primitive pairs only, enable_contact = false: seeds are
 // placed from the triangles) into m.triangle_pairs. A chunk pair lying, on both surfaces,
@@ -691,7 +678,7 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
   const Watched& wb = m.watched[static_cast<size_t>(b)];
   const BodyPose& pa = poses[static_cast<size_t>(wa.s.body)];
   const BodyPose& pb = poses[static_cast<size_t>(wb.s.body)];
-  const Box domains = PairDomains(*wa.s.surface, *wb.s.surface);
+  const Box domains = internal::PairBoxOf(*wa.s.surface, *wb.s.surface);
   NarrowPhase(m, options_, a, b, first, last, pa, pb, tracked, st);
   const size_t n_tracked = ClusterSeeds(m, options_, a, b, pa, pb, tracked, domains, st);
   RefineClusters(m, options_, a, b, n_tracked, pa, pb, domains, st, &found_);

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "contact/box_newton.h"
+#include "contact/solver_inputs.h"
 
 namespace tangent::contact::internal {
 
@@ -28,20 +29,14 @@ void MinimaBeside(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
   const double radius = 1.0 / std::max(rc.eigenvalues.cwiseAbs().maxCoeff(), 1e-300);
   const Eigen::Vector4d step = ParameterStepAlong(at, rc.min_direction);
   if (!step.allFinite()) return;
-  Eigen::Vector4d lo, hi;
-  lo << f.knots_u().domain_begin(), f.knots_v().domain_begin(), g.knots_u().domain_begin(),
-      g.knots_v().domain_begin();
-  hi << f.knots_u().domain_end(), f.knots_v().domain_end(), g.knots_u().domain_end(),
-      g.knots_v().domain_end();
-  const std::array<bool, 4> periodic = {f.periodic_u(), f.periodic_v(), g.periodic_u(),
-                                        g.periodic_v()};
+  const PairBox box = PairBoxOf(f, g);
   for (const double side : {1.0, -1.0}) {
     // Walk: ξ = 1 %, 2 %, 4 % ... of the radius (up to 2 radii) while the distance falls.
     Eigen::Vector4d best = saddle.u;
     double best_distance = saddle.beta;
     for (double xi = 0.01 * radius; xi <= 2.0 * radius; xi *= 2.0) {
       const Eigen::Vector4d x =
-          internal::ClampOrWrap<4>(saddle.u + side * xi * step, lo, hi, periodic);
+          ClampOrWrap<4>(saddle.u + side * xi * step, box.lo, box.hi, box.periodic);
       const Eigen::Vector3d p_W = pose_f.Point(f.Evaluate(x[0], x[1], 0).S);
       const PointSurfaceExtremum q = SolvePointSurface(p_W, g, pose_g, x.tail<2>());
       if (q.status != ExtremalStatus::kConverged || !(q.distance < best_distance)) break;

@@ -5,6 +5,7 @@
 // answer to a non-finite seed or pose.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <Eigen/Core>
@@ -22,6 +23,19 @@ inline Eigen::Vector2d Lo(const nurbs::NurbsSurface& s) {
 }
 inline Eigen::Vector2d Hi(const nurbs::NurbsSurface& s) {
   return {s.knots_u().domain_end(), s.knots_v().domain_end()};
+}
+
+/// A surface pair's parameter box (u, v, s, t): bounds and which directions wrap round.
+struct PairBox {
+  Eigen::Vector4d lo, hi;
+  std::array<bool, 4> periodic;
+};
+inline PairBox PairBoxOf(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g) {
+  PairBox b;
+  b.lo << Lo(f), Lo(g);
+  b.hi << Hi(f), Hi(g);
+  b.periodic = {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()};
+  return b;
 }
 
 inline bool FinitePose(const BodyPose& p) { return p.q.allFinite() && p.R_WB.allFinite(); }

@@ -3,6 +3,7 @@
 #include <Eigen/LU>  // Matrix4d::computeInverseAndDetWithCheck
 
 #include "contact/box_newton.h"
+#include "contact/solver_inputs.h"
 
 namespace tangent::contact {
 
@@ -29,11 +30,10 @@ ContactTracker::ContactTracker(const nurbs::NurbsSurface& f, const nurbs::NurbsS
 void ContactTracker::Rebind(const nurbs::NurbsSurface& f, const nurbs::NurbsSurface& g) {
   f_ = &f;
   g_ = &g;
-  lo_ << f.knots_u().domain_begin(), f.knots_v().domain_begin(), g.knots_u().domain_begin(),
-      g.knots_v().domain_begin();
-  hi_ << f.knots_u().domain_end(), f.knots_v().domain_end(), g.knots_u().domain_end(),
-      g.knots_v().domain_end();
-  periodic_ = {f.periodic_u(), f.periodic_v(), g.periodic_u(), g.periodic_v()};
+  const internal::PairBox box = internal::PairBoxOf(f, g);
+  lo_ = box.lo;
+  hi_ = box.hi;
+  periodic_ = box.periodic;
   poles_[0].Find(f);
   poles_[1].Find(g);
   charts_ = {};
