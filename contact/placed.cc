@@ -26,6 +26,13 @@ BodyPose BodyPose::FromCoordinates(const Vector7d& q) {
 void EvaluatePlaced(const nurbs::NurbsSurface& surface, const BodyPose& pose, double u, double v,
                     nurbs::SpanHint* hint, PlacedSurfacePoint* out) {
   surface.Evaluate<2>(u, v, hint, &out->body);
+  PlaceBody(pose, out);
+  out->pole = nurbs::IsDegenerate(out->body);
+  out->charted = false;
+  if (out->pole) out->n_W_limit = pose.R_WB * nurbs::UnitNormal(surface, u, v, out->body);
+}
+
+void PlaceBody(const BodyPose& pose, PlacedSurfacePoint* out) {
   const nurbs::SurfacePoint& b = out->body;
   nurbs::SurfacePoint& w = out->world;
   w.S = pose.Point(b.S);
@@ -35,9 +42,6 @@ void EvaluatePlaced(const nurbs::NurbsSurface& surface, const BodyPose& pose, do
   w.S_uv = pose.R_WB * b.S_uv;
   w.S_vv = pose.R_WB * b.S_vv;
   out->N_W = w.S_u.cross(w.S_v);
-  out->pole = nurbs::IsDegenerate(b);
-  out->charted = false;
-  if (out->pole) out->n_W_limit = pose.R_WB * nurbs::UnitNormal(surface, u, v, b);
   out->N_W_u = w.S_uu.cross(w.S_v) + w.S_u.cross(w.S_uv);
   out->N_W_v = w.S_uv.cross(w.S_v) + w.S_u.cross(w.S_vv);
 }

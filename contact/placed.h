@@ -41,6 +41,9 @@ struct PlacedSurfacePoint {
 /// Evaluates a body's surface at (u, v) to second order (fast path, allocation free).
 void EvaluatePlaced(const nurbs::NurbsSurface& surface, const BodyPose& pose, double u, double v,
                     nurbs::SpanHint* hint, PlacedSurfacePoint* out);
+/// Fills out->world, N_W and its partials from out->body (a point evaluated in the body frame,
+/// in whatever coordinates its partials are taken).
+void PlaceBody(const BodyPose& pose, PlacedSurfacePoint* out);
 
 /// A curve fixed on a body: either a space curve in the body frame, or a curve c(τ) in the
 /// parameter domain of one of the body's surfaces (a trimming loop), g(τ) = S(c(τ)).

@@ -81,32 +81,33 @@ void SecondPartials(const PoleChart& c, const PolarPartials& q, double rho,
   out->S_vv = second(1, 1);
 }
 
-// S, S_x, S_y in the body frame at uv (evaluated to second order into *p), and M, J.
-void FirstPartials(const nurbs::NurbsSurface& s, const PoleChart& c, const Eigen::Vector2d& uv,
-                   nurbs::SpanHint* hint, PolarPartials* q, Eigen::Matrix2d* M,
-                   Eigen::Matrix<double, 3, 2>* J, nurbs::SurfacePoint* out) {
-  nurbs::SurfacePoint p;
-  s.Evaluate<2>(uv[0], uv[1], hint, &p);
-  *q = Polar(c, p);
-  const double rho = std::max(c.Rho(uv), 0.0);
-  const Eigen::Vector3d U = Divided(c, *q, rho);
+// The divided Jacobian A = [T U, T S_ρ]: ∂(x, y)/∂(ρ Δa, Δρ).
+Eigen::Matrix2d DividedJacobian(const PoleChart& c, const Eigen::Vector3d& U,
+                                const Eigen::Vector3d& S_r) {
   const Eigen::Matrix<double, 2, 3> T = Tangent(c);
   Eigen::Matrix2d A;
   A.col(0) = T * U;
-  A.col(1) = T * q->S_r;
-  *M = A.inverse();
-  J->col(0) = U;
-  J->col(1) = q->S_r;
-  const Eigen::Matrix<double, 3, 2> Jc = *J * *M;
-  out->S = p.S;
-  out->S_u = Jc.col(0);
-  out->S_v = Jc.col(1);
-  *J = Jc;
+  A.col(1) = T * S_r;
+  return A;
 }
 
-}  // namespace
-
-namespace {
+// S, S_x, S_y in the body frame at uv into *out, with the polar partials there, M = A⁻¹ and the
+// chart's first partials Jc = [S_x S_y] (what the second partials need).
+void FirstPartials(const nurbs::NurbsSurface& s, const PoleChart& c, const Eigen::Vector2d& uv,
+                   nurbs::SpanHint* hint, PolarPartials* q, Eigen::Matrix2d* M,
+                   Eigen::Matrix<double, 3, 2>* Jc, nurbs::SurfacePoint* out) {
+  nurbs::SurfacePoint p;
+  s.Evaluate<2>(uv[0], uv[1], hint, &p);
+  *q = Polar(c, p);
+  const Eigen::Vector3d U = Divided(c, *q, std::max(c.Rho(uv), 0.0));
+  *M = DividedJacobian(c, U, q->S_r).inverse();
+  Eigen::Matrix<double, 3, 2> J;
+  J << U, q->S_r;
+  *Jc = J * *M;
+  out->S = p.S;
+  out->S_u = Jc->col(0);
+  out->S_v = Jc->col(1);
+}
 
 // The chart of a pole row, false at a vertex.
 bool MakeChart(const nurbs::NurbsSurface& s, const internal::PoleRow& row, PoleChart* chart) {
@@ -260,11 +261,8 @@ bool ChartParameters(const nurbs::NurbsSurface& s, const PoleChart& c, const Eig
       *uv = at;
       return std::abs(N.dot(c.n)) >= kChartNormalCosine * N.norm();
     }
-    const Eigen::Vector3d U = Divided(c, q, rho);
-    Eigen::Matrix2d A;
-    A.col(0) = T * U;
-    A.col(1) = T * q.S_r;
-    const Eigen::Vector2d step = -A.inverse() * G;  // (ρ Δa, Δρ)
+    const Eigen::Vector2d step =
+        -DividedJacobian(c, Divided(c, q, rho), q.S_r).inverse() * G;  // (ρ Δa, Δρ)
     if (!step.allFinite()) return false;
     const double next_rho = rho + step[1];
     if (rho > 0.0) a += step[0] / rho;  // (at the row itself the angle is not defined yet)
@@ -294,7 +292,6 @@ void EvaluateCharted(const nurbs::NurbsSurface& s, const PoleChart& chart, const
   const double rho = std::max(chart.Rho(uv), 0.0);
   const double second_rho = kSecondOrderRho * chart.width;
   if (rho >= second_rho) {
-    // J was overwritten with the chart's first partials [S_x S_y].
     SecondPartials(chart, q, rho, M, J, &b);
   } else {
     // At the same angle, second_rho from the row.
@@ -307,18 +304,9 @@ void EvaluateCharted(const nurbs::NurbsSurface& s, const PoleChart& chart, const
     FirstPartials(s, chart, off, hint, &q2, &M2, &J2, &b2);
     SecondPartials(chart, q2, second_rho, M2, J2, &b);
   }
-  nurbs::SurfacePoint& w = out->world;
-  w.S = pose.Point(b.S);
-  w.S_u = pose.R_WB * b.S_u;
-  w.S_v = pose.R_WB * b.S_v;
-  w.S_uu = pose.R_WB * b.S_uu;
-  w.S_uv = pose.R_WB * b.S_uv;
-  w.S_vv = pose.R_WB * b.S_vv;
-  out->N_W = w.S_u.cross(w.S_v);
+  PlaceBody(pose, out);
   out->pole = false;
   out->charted = true;
-  out->N_W_u = w.S_uu.cross(w.S_v) + w.S_u.cross(w.S_uv);
-  out->N_W_v = w.S_uv.cross(w.S_v) + w.S_u.cross(w.S_vv);
 }
 
 }  // namespace tangent::contact

@@ -48,17 +48,8 @@ TrackStatus ContactTracker::Reset(const Vector7d& q_f, const Vector7d& q_g,
   params_ = internal::ClampOrWrap<4>(u, lo_, hi_, periodic_);
   u_ = params_;
   charts_ = {};
-  for (int k = 0; k < 2; ++k) {
-    const PoleChart* c = poles_[k].Near(params_.segment<2>(2 * k), kChartEnter);
-    if (!c || !ChartHolds(k == 0 ? *f_ : *g_, *c, params_.segment<2>(2 * k),
-                          k == 0 ? &hint_f_ : &hint_g_)) {
-      continue;
-    }
-    charts_.side[k] = *c;
-    u_.segment<2>(2 * k) = ChartCoordinates(k == 0 ? *f_ : *g_, *c, params_.segment<2>(2 * k),
-                                            k == 0 ? &hint_f_ : &hint_g_);
-  }
   u_q_.setZero();
+  SwitchCharts();  // a side next to a smooth pole starts in its chart
   return Evaluate(q_f, q_g, /*correct=*/false);
 }
 
@@ -70,8 +61,8 @@ bool ContactTracker::ToParameters() {
       continue;
     }
     Eigen::Vector2d uv;
-    if (!ChartParameters(k == 0 ? *f_ : *g_, c, u_.segment<2>(2 * k), params_.segment<2>(2 * k),
-                         k == 0 ? &hint_f_ : &hint_g_, &uv) ||
+    if (!ChartParameters(Surface(k), c, u_.segment<2>(2 * k), params_.segment<2>(2 * k), Hint(k),
+                         &uv) ||
         c.Rho(uv) > kChartReach * c.width) {
       return false;
     }
@@ -82,8 +73,8 @@ bool ContactTracker::ToParameters() {
 
 void ContactTracker::SwitchCharts() {
   for (int k = 0; k < 2; ++k) {
-    const nurbs::NurbsSurface& s = k == 0 ? *f_ : *g_;
-    nurbs::SpanHint* hint = k == 0 ? &hint_f_ : &hint_g_;
+    const nurbs::NurbsSurface& s = Surface(k);
+    nurbs::SpanHint* hint = Hint(k);
     const Eigen::Vector2d uv = params_.segment<2>(2 * k);
     PoleChart& c = charts_.side[k];
     if (c.valid()) {

@@ -80,6 +80,9 @@ class ContactTracker {
   bool ToParameters();
   /// Takes or leaves each side's chart by the hysteresis bounds, converting u_ and u_q_.
   void SwitchCharts();
+  /// Side k's surface (0: f, 1: g) and span hint.
+  const nurbs::NurbsSurface& Surface(int k) const { return k == 0 ? *f_ : *g_; }
+  nurbs::SpanHint* Hint(int k) { return k == 0 ? &hint_f_ : &hint_g_; }
 
   const nurbs::NurbsSurface* f_;
   const nurbs::NurbsSurface* g_;

@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "server/servo.h"
 
@@ -19,15 +20,26 @@ inline Eigen::Vector3d DragPath(double t) {
   return {4e-3 * std::sin(a), lift + 4e-3 * (std::cos(a) - 1.0), 0.0};
 }
 
-/// The device state on that path at time t (s), received at now_ns.
-inline server::DeviceSample DragSample(int64_t seq, double t, int64_t now_ns) {
+/// A device state with the hand at `position` (device frame, m) turned by `orientation`,
+/// received at now_ns.
+inline server::DeviceSample HandSample(
+    int64_t seq, int64_t now_ns, const Eigen::Vector3d& position,
+    const Eigen::Quaterniond& orientation = Eigen::Quaterniond::Identity()) {
   server::DeviceSample s;
   s.seq = seq;
   s.utime = now_ns / 1000;
   s.received_ns = now_ns;
-  const Eigen::Vector3d hand = DragPath(t);
-  for (int i = 0; i < 3; ++i) s.position[i] = hand[i];
+  for (int i = 0; i < 3; ++i) s.position[i] = position[i];
+  s.orientation[0] = orientation.w();
+  s.orientation[1] = orientation.x();
+  s.orientation[2] = orientation.y();
+  s.orientation[3] = orientation.z();
   return s;
+}
+
+/// The device state on that path at time t (s), received at now_ns.
+inline server::DeviceSample DragSample(int64_t seq, double t, int64_t now_ns) {
+  return HandSample(seq, now_ns, DragPath(t));
 }
 
 }  // namespace tangent::bench

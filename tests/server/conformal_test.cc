@@ -18,6 +18,7 @@
 #include "server/servo.h"
 #include "testing/alloc_counter.h"
 #include "testing/conformal_scenes.h"
+#include "testing/drag_path.h"
 
 namespace tangent::server {
 namespace {
@@ -54,11 +55,7 @@ Outcome Drive(bool lines, double seconds) {
     Eigen::Vector3d p = Eigen::Vector3d::Zero();
     if (t > 1.0) p.z() = -2e-3 * std::min(1.0, t - 1.0);
     if (t > 3.0) p.x() = 5e-3 * std::sin(1.5 * (t - 3.0));
-    DeviceSample s;
-    s.seq = k;
-    s.utime = now / 1000;
-    s.received_ns = now;
-    for (int i = 0; i < 3; ++i) s.position[i] = p[i];
+    const DeviceSample s = bench::HandSample(k, now, p);
     const bool sliding = t > 3.5;
     const long before = testing::AllocationCount();
     for (int tick = 0; tick < 4; ++tick) {
@@ -167,15 +164,7 @@ SocketOutcome DriveSocket() {
       p.y() = 3e-3 * rise * std::sin(a);
     }
     const Eigen::Quaterniond q(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX()));
-    DeviceSample s;
-    s.seq = step;
-    s.utime = now / 1000;
-    s.received_ns = now;
-    for (int i = 0; i < 3; ++i) s.position[i] = p[i];
-    s.orientation[0] = q.w();
-    s.orientation[1] = q.x();
-    s.orientation[2] = q.y();
-    s.orientation[3] = q.z();
+    const DeviceSample s = bench::HandSample(step, now, p, q);
     const long before = testing::AllocationCount();
     for (int tick = 0; tick < 4; ++tick) {
       servo.Tick(&s, now, &r);
