@@ -108,13 +108,13 @@ Row14 CurveCurveDistanceGradient(const CurveCurveEval& e, const BodyPose& pose_a
   return n.transpose() * Derivatives(e, pose_a, pose_b).d_q;
 }
 
-Matrix14d CurveCurveDistanceHessian(const CurveCurveEval& e, const BodyPose& pose_a,
-                                    const BodyPose& pose_b, const Matrix2x14& x_q) {
-  const PoseDerivatives p = Derivatives(e, pose_a, pose_b);
-  const double len = e.d.norm();
-  const Eigen::Vector3d n = e.d / len;
-  Matrix3x14 D = p.d_q + e.a.world.C1 * x_q.row(0) - e.b.world.C1 * x_q.row(1);
-  const Matrix3x14 n_q = (Eigen::Matrix3d::Identity() - n * n.transpose()) * D / len;
+namespace {
+
+// ∂(n·∂d/∂q)/∂q along the extremum for a direction n whose total derivative is n_q: the one
+// formula of |d|'s Hessian (n = d/|d|) and the signed row's (n = ν).
+Matrix14d RowHessian(const CurveCurveEval& e, const BodyPose& pose_a, const BodyPose& pose_b,
+                     const PoseDerivatives& p, const Matrix2x14& x_q, const Eigen::Vector3d& n,
+                     const Matrix3x14& n_q) {
   Matrix14d H = p.d_q.transpose() * n_q;  // H(i, j) = ∂(gradient_i)/∂q_j
   // n·∂²d/∂q²: each body's rotation curvature of its point (positions enter linearly).
   H.block<4, 4>(3, 3) += RotateHessian(pose_a.q.tail<4>(), e.a.body.C, n);
@@ -125,6 +125,56 @@ Matrix14d CurveCurveDistanceHessian(const CurveCurveEval& e, const BodyPose& pos
   v_t.rightCols<7>() = -n.transpose() * p.b1_q;
   H += v_s.transpose() * x_q.row(0) + v_t.transpose() * x_q.row(1);
   return H;
+}
+
+}  // namespace
+
+Matrix14d CurveCurveDistanceHessian(const CurveCurveEval& e, const BodyPose& pose_a,
+                                    const BodyPose& pose_b, const Matrix2x14& x_q) {
+  const PoseDerivatives p = Derivatives(e, pose_a, pose_b);
+  const double len = e.d.norm();
+  const Eigen::Vector3d n = e.d / len;
+  const Matrix3x14 D = p.d_q + e.a.world.C1 * x_q.row(0) - e.b.world.C1 * x_q.row(1);
+  const Matrix3x14 n_q = (Eigen::Matrix3d::Identity() - n * n.transpose()) * D / len;
+  return RowHessian(e, pose_a, pose_b, p, x_q, n, n_q);
+}
+
+bool CommonNormal(const CurveCurveEval& e, double sign, Eigen::Vector3d* nu) {
+  const Eigen::Vector3d& a1 = e.a.world.C1;
+  const Eigen::Vector3d& b1 = e.b.world.C1;
+  const Eigen::Vector3d c = a1.cross(b1);
+  const double len = c.norm();
+  if (!(len > 1e-9 * a1.norm() * b1.norm())) return false;
+  *nu = (sign / len) * c;
+  return true;
+}
+
+Row14 EdgeEdgeGradient(const CurveCurveEval& e, const BodyPose& pose_a, const BodyPose& pose_b,
+                       const Eigen::Vector3d& nu) {
+  return nu.transpose() * Derivatives(e, pose_a, pose_b).d_q;
+}
+
+Matrix14d EdgeEdgeHessian(const CurveCurveEval& e, const BodyPose& pose_a, const BodyPose& pose_b,
+                          const Matrix2x14& x_q, const Eigen::Vector3d& nu) {
+  const PoseDerivatives p = Derivatives(e, pose_a, pose_b);
+  const Eigen::Vector3d& a1 = e.a.world.C1;
+  const Eigen::Vector3d& b1 = e.b.world.C1;
+  // The tangents' total derivatives along the extremum (each body's own block, and the
+  // parameters' motion), then the cross product's: Ȧ' × b' + a' × Ḃ'.
+  Matrix3x14 A1 = e.a.world.C2 * x_q.row(0);
+  A1.leftCols<7>() += p.a1_q;
+  Matrix3x14 B1 = e.b.world.C2 * x_q.row(1);
+  B1.rightCols<7>() += p.b1_q;
+  Matrix3x14 c_q;
+  for (int j = 0; j < 14; ++j) {
+    c_q.col(j) = Eigen::Vector3d(A1.col(j)).cross(b1) + a1.cross(Eigen::Vector3d(B1.col(j)));
+  }
+  // ν = σ c/|c|: its derivative is σ (I − ĉĉᵀ) ċ/|c|, and σ ĉ = ν, so the sign rides on ċ.
+  const Eigen::Vector3d c = a1.cross(b1);
+  const double sign = nu.dot(c) >= 0.0 ? 1.0 : -1.0;
+  const Matrix3x14 n_q =
+      (sign / c.norm()) * ((Eigen::Matrix3d::Identity() - nu * nu.transpose()) * c_q);
+  return RowHessian(e, pose_a, pose_b, p, x_q, nu, n_q);
 }
 
 }  // namespace tangent::contact

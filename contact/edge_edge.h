@@ -3,8 +3,8 @@
 // Edge against edge (issue 34, seed 001's third trimming constraint): the extremal distance
 // between two curves on two bodies, each a trim edge of a face mapped through its surface
 // (BodyCurve), a(s) on body A and b(t) on body B. docs/trimming.md, "Edge against edge", has
-// the mathematics. The solver, its closed-form Jacobian and the distance's gradient and Hessian
-// in the poses; the servo's and the global stage's use of them is not built yet.
+// the mathematics. The solver, its closed-form Jacobian, and the distance's and the signed
+// row's gradient and Hessian in the poses; contact/trimmed.h follows such contacts.
 
 #include <Eigen/Core>
 #include <array>
@@ -72,5 +72,21 @@ Row14 CurveCurveDistanceGradient(const CurveCurveEval& e, const BodyPose& pose_a
 /// ∂²d/∂q∂s = [∂a'/∂q_A, 0], ∂²d/∂q∂t = [0, −∂b'/∂q_B]. @pre |d| > 0.
 Matrix14d CurveCurveDistanceHessian(const CurveCurveEval& e, const BodyPose& pose_a,
                                     const BodyPose& pose_b, const Matrix2x14& x_q);
+
+/// The signed edge–edge row (docs/trimming.md, "Edge against edge"). At an extremum where both
+/// parameters are free, d ⟂ a' and d ⟂ b', so d lies along the edges' common normal
+/// ν = σ (a' × b')/|a' × b'|, and β = d·ν is the signed distance: smooth through touching (d = 0),
+/// where |d| is not. σ = ±1 is the contact's side, chosen where it starts (ν from g's edge
+/// towards f's where they are apart) and kept while it is followed.
+///   ∇β = ν·∂d/∂q at fixed (s, t) (ν ⟂ a', b' everywhere and d ⟂ ∂ν at the extremum),
+///   ∇²β = (∂d/∂q)ᵀ ∂ν/∂q + ν·∂²d/∂q² + (νᵀ ∂a'/∂q)ᵀ x_q,s − (νᵀ ∂b'/∂q)ᵀ x_q,t,
+///   ∂ν/∂q = (I − ννᵀ)(Ȧ' × b' + a' × Ḃ')/|a' × b'|,  Ȧ' = ∂a'/∂q + a'' x_q,s,  Ḃ' likewise.
+/// False (ν unset) where the edges are parallel to 1e-9 (|a' × b'| ≤ 1e-9 |a'||b'|).
+bool CommonNormal(const CurveCurveEval& e, double sign, Eigen::Vector3d* nu);
+Row14 EdgeEdgeGradient(const CurveCurveEval& e, const BodyPose& pose_a, const BodyPose& pose_b,
+                       const Eigen::Vector3d& nu);
+/// ∇²β as above, the rotations' curvature of each point included. x_q from CurveCurveJacobian.
+Matrix14d EdgeEdgeHessian(const CurveCurveEval& e, const BodyPose& pose_a, const BodyPose& pose_b,
+                          const Matrix2x14& x_q, const Eigen::Vector3d& nu);
 
 }  // namespace tangent::contact

@@ -208,12 +208,12 @@ void EvaluateCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f, 
                           int* span_g, nurbs::SpanHint* hint_g, CurveSurfaceEval* out);
 
 struct CurveSurfaceExtremum {
-  Eigen::Vector3d u;  ///< (u, v) on f, τ on the curve
+  Eigen::Vector3d u = Eigen::Vector3d::Zero();  ///< (u, v) on f, τ on the curve
   /// (g − f)·n_f: > 0 when the curve is outside f (m); at a boundary extremum |g − f| signed by
   /// that side.
   double beta = 0.0;
-  Eigen::Vector3d p_f, p_g;
-  Eigen::Matrix3d R_WCf;  ///< contact frame of f at p_f
+  Eigen::Vector3d p_f = Eigen::Vector3d::Zero(), p_g = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d R_WCf = Eigen::Matrix3d::Identity();  ///< contact frame of f at p_f
   ExtremalStatus status = ExtremalStatus::kNotConverged;
   ExtremumKind kind = ExtremumKind::kDegenerate;
   std::array<bool, 3> at_bound{};

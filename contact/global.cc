@@ -572,8 +572,8 @@ size_t ClusterSeeds(GlobalContactStage::Impl& m, const GlobalOptions& options, i
 constexpr double kTrackedResidual = 1e-9;
 
 // What a face extremum e of surfaces a, b stands for when either is trimmed: itself while its
-// points lie on both materials, else the edge contact of the first surface it leaves
-// (contact/trimmed.h), with that edge's distance and points in (a, b) order.
+// points lie on both materials, else the edge contact of the surface it leaves, or with both
+// trimmed the two edges' (contact/trimmed.h), with its distance and points in (a, b) order.
 struct OnMaterial {
   bool on_edge = false;
   double beta = 0.0;
@@ -582,6 +582,11 @@ struct OnMaterial {
 };
 OnMaterial MeasureOnMaterial(const Watched& wa, const BodyPose& pa, const Watched& wb,
                              const BodyPose& pb, const SurfaceSurfaceExtremum& e) {
+  if (wa.edges && wb.edges) {
+    const TrimmedMeasure t = MeasureTrimmedPair(*wa.edges, pa, *wb.s.surface, wb.edges.get(), pb, e,
+                                                nullptr, nullptr, nullptr);
+    return {t.on_edge, t.beta, t.p_f, t.p_g, t.status};
+  }
   if (wa.edges) {
     const TrimmedMeasure t = MeasureTrimmed(*wa.edges, pa, *wb.s.surface, pb, e);
     if (t.on_edge) return {true, t.beta, t.p_f, t.p_g, t.status};

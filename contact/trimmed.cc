@@ -43,17 +43,21 @@ TrimEdges::TrimEdges(const nurbs::NurbsSurface* f, const nurbs::TrimmedDomain* t
   }
 }
 
-void TrimEdges::Start(const nurbs::TrimmedDomain::Closest& near, const Eigen::Vector2d& st,
-                      Edge* e) const {
+int TrimEdges::PieceOf(const nurbs::TrimmedDomain::Closest& near) const {
   const std::vector<Piece>& loop = pieces_[static_cast<size_t>(near.loop)];
-  int piece = 0;
   for (size_t p = 0; p < loop.size(); ++p) {
     const nurbs::KnotVector& k = loop[p].c.knots();
     if (loop[p].curve == near.curve && near.t >= k.domain_begin() && near.t <= k.domain_end()) {
-      piece = static_cast<int>(p);
-      break;
+      return static_cast<int>(p);
     }
   }
+  return 0;
+}
+
+void TrimEdges::Start(const nurbs::TrimmedDomain::Closest& near, const Eigen::Vector2d& st,
+                      Edge* e) const {
+  const std::vector<Piece>& loop = pieces_[static_cast<size_t>(near.loop)];
+  const int piece = PieceOf(near);
   e->loop = near.loop;
   e->piece = piece;
   e->curve = loop[static_cast<size_t>(piece)].curve;
@@ -148,6 +152,227 @@ TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
   m.p_f = e.p_g;  // the solver's curve is f's edge, its surface g
   m.p_g = e.p_f;
   m.status = e.status;
+  return m;
+}
+
+namespace {
+
+// One side of an edge–edge walk: where the extremum stopped at the end of its piece (not a
+// periodic one), moves to the neighbour there and puts the parameter at its near end; false
+// when the neighbour is the piece it came from (the extremum is the joint between them).
+bool WalkOn(const TrimEdges& edges, int loop, int* piece, int* from, double* x) {
+  const std::vector<TrimEdges::Piece>& pieces = edges.loops()[static_cast<size_t>(loop)];
+  const int n = static_cast<int>(pieces.size());
+  const nurbs::KnotVector& k = pieces[static_cast<size_t>(*piece)].c.knots();
+  const bool at_end = *x >= 0.5 * (k.domain_begin() + k.domain_end());
+  const int next = (*piece + (at_end ? 1 : n - 1)) % n;
+  if (next == *from) return false;
+  *from = *piece;
+  *piece = next;
+  const nurbs::KnotVector& kn = pieces[static_cast<size_t>(next)].c.knots();
+  *x = at_end ? kn.domain_begin() : kn.domain_end();
+  return true;
+}
+
+}  // namespace
+
+void SolveEdgeEdge(const TrimEdges& edges_f, const BodyPose& pose_f, const TrimEdges& edges_g,
+                   const BodyPose& pose_g, const Eigen::Vector3d& side, EdgeEdgeFollow* e,
+                   CurveCurveEval* at) {
+  const int n = static_cast<int>(edges_f.loops()[static_cast<size_t>(e->loop_f)].size() +
+                                 edges_g.loops()[static_cast<size_t>(e->loop_g)].size());
+  int from_f = -1, from_g = -1;
+  bool joint_f = false, joint_g = false;
+  CurveCurveEval ev;
+  for (int walk = 0; walk <= n; ++walk) {
+    e->ext = SolveCurveCurve(edges_f.Curve(e->loop_f, e->piece_f), pose_f,
+                             edges_g.Curve(e->loop_g, e->piece_g), pose_g, e->x, {}, &ev);
+    e->x = e->ext.x;
+    bool moved = false;
+    if (e->ext.at_bound[0] && !joint_f) {
+      moved = WalkOn(edges_f, e->loop_f, &e->piece_f, &from_f, &e->x[0]);
+      joint_f = !moved;
+    }
+    if (!moved && e->ext.at_bound[1] && !joint_g) {
+      moved = WalkOn(edges_g, e->loop_g, &e->piece_g, &from_g, &e->x[1]);
+      joint_g = !moved;
+    }
+    if (!moved) break;
+  }
+  // Held only at joints that both neighbours push into: the loops' extremum (as TrimEdges::Solve).
+  if (e->ext.status == ExtremalStatus::kAtBoundary && (!e->ext.at_bound[0] || joint_f) &&
+      (!e->ext.at_bound[1] || joint_g)) {
+    e->ext.status = ExtremalStatus::kConverged;
+  }
+  // ν: the common normal where both parameters are free, else along d; on `side`'s side.
+  Eigen::Vector3d nu;
+  e->common_normal = !e->ext.at_bound[0] && !e->ext.at_bound[1] && CommonNormal(ev, 1.0, &nu);
+  if (!e->common_normal) {
+    const double len = ev.d.norm();
+    nu = len > 0.0 ? Eigen::Vector3d(ev.d / len) : side.normalized();
+  }
+  e->nu = nu.dot(side) < 0.0 ? Eigen::Vector3d(-nu) : nu;
+  if (at) *at = ev;
+}
+
+namespace {
+
+// Whether uv lies on the material of `edges`' face, through the memo as MeasureTrimmed uses it;
+// when not, *near is the loops' point nearest uv.
+bool MaterialAt(const TrimEdges& edges, const Eigen::Vector2d& uv, MaterialMemo* memo,
+                nurbs::TrimmedDomain::Closest* near) {
+  near->loop = -1;
+  if (memo && memo->clearance > 0.0 && (uv - memo->uv).norm() < memo->clearance) return true;
+  double clearance = 0.0;
+  const bool material = edges.trim().Contains(uv, near, &clearance);
+  if (memo) *memo = {uv, material ? clearance : 0.0};
+  if (!material && near->loop < 0) *near = edges.trim().Nearest(uv);
+  return material;
+}
+
+// The in-surface direction into the material at τ on an edge piece, world: m = n × E'/|E'|,
+// n = S_u × S_v (the loops keep the material on their left in the domain), E' the edge's world
+// tangent there.
+Eigen::Vector3d IntoMaterial(const TrimEdges& edges, int loop, int piece, double tau,
+                             const BodyPose& pose, const Eigen::Vector3d& tangent) {
+  const TrimEdges::Piece& p = edges.loops()[static_cast<size_t>(loop)][static_cast<size_t>(piece)];
+  const Eigen::Vector2d uv = p.c.Evaluate(tau, 0).C;
+  const nurbs::SurfacePoint sp = edges.surface().Evaluate(uv[0], uv[1], 1);
+  const Eigen::Vector3d n = pose.R_WB * sp.S_u.cross(sp.S_v);
+  return n.cross(tangent).normalized();
+}
+
+// An edge of `edges`' face against the other face, seeded at τ on (loop, piece) with the other
+// face's parameters `other` (an edge–edge contact giving one edge up).
+TrimEdges::Edge EdgeAt(const TrimEdges& edges, int loop, int piece, double tau,
+                       const Eigen::Vector2d& other) {
+  TrimEdges::Edge e;
+  e.loop = loop;
+  e.piece = piece;
+  e.curve = edges.loops()[static_cast<size_t>(loop)][static_cast<size_t>(piece)].curve;
+  e.u << other, tau;
+  return e;
+}
+
+// The other face's parameters at τ on an edge piece (its domain curve's point).
+Eigen::Vector2d PieceUv(const TrimEdges& edges, int loop, int piece, double tau) {
+  return edges.loops()[static_cast<size_t>(loop)][static_cast<size_t>(piece)].c.Evaluate(tau, 0).C;
+}
+
+// The measure of an edge of f against g's face (`of_g`: an edge of g against f's face, its
+// points swapped back into (f, g) order and β's direction with them).
+TrimmedMeasure EdgeMeasure(const TrimEdges::Edge& e, bool of_g) {
+  TrimmedMeasure m;
+  m.on_edge = true;
+  m.form = of_g ? TrimmedForm::kEdgeOfG : TrimmedForm::kEdgeOfF;
+  m.edge = e;
+  m.beta = e.ext.beta;
+  m.p_f = of_g ? e.ext.p_f : e.ext.p_g;  // the solver's curve is the edge, its surface the face
+  m.p_g = of_g ? e.ext.p_g : e.ext.p_f;
+  m.status = e.ext.status;
+  return m;
+}
+
+}  // namespace
+
+TrimmedMeasure MeasureTrimmedPair(const TrimEdges& edges_f, const BodyPose& pose_f,
+                                  const nurbs::NurbsSurface& g, const TrimEdges* edges_g,
+                                  const BodyPose& pose_g, const SurfaceSurfaceExtremum& face,
+                                  const TrimmedMeasure* from, MaterialMemo* memo_f,
+                                  MaterialMemo* memo_g) {
+  const TrimmedForm was = from ? from->form : TrimmedForm::kFace;
+  if (!edges_g) {
+    TrimmedMeasure m = MeasureTrimmed(edges_f, pose_f, g, pose_g, face,
+                                      was == TrimmedForm::kEdgeOfF ? &from->edge : nullptr, memo_f);
+    m.form = m.on_edge ? TrimmedForm::kEdgeOfF : TrimmedForm::kFace;
+    return m;
+  }
+  const nurbs::NurbsSurface& f = edges_f.surface();
+  // The faces' extremum where its points lie on both materials.
+  nurbs::TrimmedDomain::Closest near_f, near_g;
+  const bool on_f = MaterialAt(edges_f, face.u.head<2>(), memo_f, &near_f);
+  const bool on_g = MaterialAt(*edges_g, face.u.tail<2>(), memo_g, &near_g);
+  if (on_f && on_g) {
+    TrimmedMeasure m;
+    m.beta = face.beta;
+    m.p_f = face.p_f;
+    m.p_g = face.p_g;
+    m.status = face.status;
+    return m;
+  }
+  // Else an edge contact, followed in its own form while it holds (seed 001's constraints as a
+  // local problem: min |a − b| over both materials). An edge against a face holds while its
+  // point on the face lies on that face's material; two edges hold while neither face offers a
+  // nearer point, i.e. while each edge constraint's multiplier is non-negative: moving b into
+  // g's material by ε changes β by −ε ν·m_g, moving a into f's by +ε ν·m_f.
+  EdgeEdgeFollow ee;
+  Eigen::Vector3d side;  // from g's edge towards f's where they are apart
+  nurbs::TrimmedDomain::Closest near;
+  if (was == TrimmedForm::kEdgeEdge) {
+    ee = from->edge_edge;
+    CurveCurveEval at;
+    SolveEdgeEdge(edges_f, pose_f, *edges_g, pose_g, ee.nu, &ee, &at);
+    const double hold_g =
+        -ee.nu.dot(IntoMaterial(*edges_g, ee.loop_g, ee.piece_g, ee.x[1], pose_g, at.b.world.C1));
+    const double hold_f =
+        ee.nu.dot(IntoMaterial(edges_f, ee.loop_f, ee.piece_f, ee.x[0], pose_f, at.a.world.C1));
+    if (hold_g < 0.0 && hold_g <= hold_f) {  // g's material offers a nearer point: f's edge on g
+      TrimEdges::Edge e = EdgeAt(edges_f, ee.loop_f, ee.piece_f, ee.x[0],
+                                 PieceUv(*edges_g, ee.loop_g, ee.piece_g, ee.x[1]));
+      edges_f.Solve(g, pose_g, pose_f, &e);
+      if (MaterialAt(*edges_g, e.ext.u.head<2>(), nullptr, &near)) return EdgeMeasure(e, false);
+    } else if (hold_f < 0.0) {  // f's material does: g's edge on f
+      TrimEdges::Edge e = EdgeAt(*edges_g, ee.loop_g, ee.piece_g, ee.x[1],
+                                 PieceUv(edges_f, ee.loop_f, ee.piece_f, ee.x[0]));
+      edges_g->Solve(f, pose_f, pose_g, &e);
+      if (MaterialAt(edges_f, e.ext.u.head<2>(), nullptr, &near)) return EdgeMeasure(e, true);
+    }
+  } else {
+    // An edge against a face: followed (or started at the loop point nearest the face's point
+    // off its material), kept while its point on the face lies on that face's material.
+    const bool of_g = was == TrimmedForm::kEdgeOfG || (was == TrimmedForm::kFace && on_f);
+    const TrimEdges& mine = of_g ? *edges_g : edges_f;
+    const TrimEdges& theirs = of_g ? edges_f : *edges_g;
+    const BodyPose& pose_mine = of_g ? pose_g : pose_f;
+    const BodyPose& pose_theirs = of_g ? pose_f : pose_g;
+    TrimEdges::Edge e;
+    if (was != TrimmedForm::kFace) {
+      e = from->edge;
+    } else {
+      const Eigen::Vector2d theirs_uv = of_g ? face.u.head<2>() : face.u.tail<2>();
+      mine.StartNear(of_g ? near_g : near_f, theirs.surface(), pose_theirs, pose_mine, theirs_uv,
+                     &e);
+    }
+    mine.Solve(theirs.surface(), pose_theirs, pose_mine, &e);
+    if (MaterialAt(theirs, e.ext.u.head<2>(), nullptr, &near)) return EdgeMeasure(e, of_g);
+    // Its point left the other face's material: the two edges, from the edge's point and the
+    // other loop's point nearest the point it left for. β's side: the face's normal.
+    const int piece = theirs.PieceOf(near);
+    if (of_g) {
+      ee.loop_f = near.loop;
+      ee.piece_f = piece;
+      ee.loop_g = e.loop;
+      ee.piece_g = e.piece;
+      ee.x << near.t, e.u[2];
+      side = -e.ext.R_WCf.col(2);  // against f's normal
+    } else {
+      ee.loop_f = e.loop;
+      ee.piece_f = e.piece;
+      ee.loop_g = near.loop;
+      ee.piece_g = piece;
+      ee.x << e.u[2], near.t;
+      side = e.ext.R_WCf.col(2);  // along g's normal
+    }
+    SolveEdgeEdge(edges_f, pose_f, *edges_g, pose_g, side, &ee);
+  }
+  TrimmedMeasure m;
+  m.on_edge = true;
+  m.form = TrimmedForm::kEdgeEdge;
+  m.edge_edge = ee;
+  m.p_f = ee.ext.p_a;
+  m.p_g = ee.ext.p_b;
+  m.beta = (m.p_f - m.p_g).dot(ee.nu);
+  m.status = ee.ext.status;
   return m;
 }
 

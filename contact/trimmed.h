@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 
+#include "contact/edge_edge.h"
 #include "contact/extremal.h"
 #include "contact/placed.h"
 #include "nurbs/curve.h"
@@ -47,6 +48,8 @@ class TrimEdges {
   const nurbs::TrimmedDomain& trim() const { return *trim_; }
   const std::vector<std::vector<Piece>>& loops() const { return pieces_; }
 
+  /// The piece of loop near.loop holding the loop point `near`.
+  int PieceOf(const nurbs::TrimmedDomain::Closest& near) const;
   /// Places *e on the piece holding `near` (TrimmedDomain::Nearest's closest point), g's
   /// parameters `st`.
   void Start(const nurbs::TrimmedDomain::Closest& near, const Eigen::Vector2d& st, Edge* e) const;
@@ -60,6 +63,11 @@ class TrimEdges {
   /// loop while it stops at a piece's end (at most once round). Allocation free.
   void Solve(const nurbs::NurbsSurface& g, const BodyPose& pose_g, const BodyPose& pose_f,
              Edge* e) const;
+  /// Piece `piece` of loop `loop` as a curve on f's body.
+  BodyCurve Curve(int loop, int piece) const {
+    const Piece& p = pieces_[static_cast<size_t>(loop)][static_cast<size_t>(piece)];
+    return BodyCurve(f_, &p.c, p.periodic);
+  }
   /// The piece *e is on as a curve on f's body.
   BodyCurve Curve(const Edge& e) const {
     const Piece& p = pieces_[static_cast<size_t>(e.loop)][static_cast<size_t>(e.piece)];
@@ -77,9 +85,35 @@ class TrimEdges {
 /// f's untrimmed border off the material), the nearest edge's against g. β > 0 apart. The edge
 /// is followed from `from` (an earlier measure's edge) when that is on the loop nearest the face
 /// point, else started there (TrimEdges::StartNear). Allocation free.
+/// The form a contact between trimmed faces takes (seed 001's three trimming constraints, with
+/// either face's edge): the faces' extremum, f's edge against g's face, g's edge against f's face,
+/// or f's edge against g's edge.
+enum class TrimmedForm { kFace, kEdgeOfF, kEdgeOfG, kEdgeEdge };
+
+/// An edge–edge contact followed (docs/trimming.md, "Edge against edge"): a piece of f's loops
+/// and one of g's, (τ_f, τ_g), and ν, the direction β is measured along (the common normal
+/// σ(a' × b')/|a' × b'| from g's edge towards f's; ±d/|d| where the extremum is held at a joint
+/// of a loop or the edges are parallel). β = (a − b)·ν.
+struct EdgeEdgeFollow {
+  int loop_f = -1, piece_f = -1, loop_g = -1, piece_g = -1;
+  Eigen::Vector2d x = Eigen::Vector2d::Zero();
+  Eigen::Vector3d nu = Eigen::Vector3d::Zero();
+  CurveCurveExtremum ext;
+  bool common_normal = false;  ///< ν is the common normal (both parameters free, not parallel)
+};
+/// Solves *e from its pieces and x, walking along either loop while the extremum stops at a
+/// piece's end (at most once round each), and measures it: ν keeps the side of `side` (the last
+/// ν, or the form's it switched from). `at` (may be null): the evaluation at the extremum.
+/// Allocation free.
+void SolveEdgeEdge(const TrimEdges& edges_f, const BodyPose& pose_f, const TrimEdges& edges_g,
+                   const BodyPose& pose_g, const Eigen::Vector3d& side, EdgeEdgeFollow* e,
+                   CurveCurveEval* at = nullptr);
+
 struct TrimmedMeasure {
   bool on_edge = false;
-  TrimEdges::Edge edge;  ///< when on_edge
+  TrimmedForm form = TrimmedForm::kFace;
+  TrimEdges::Edge edge;  ///< when on_edge: f's edge (kEdgeOfF) or g's (kEdgeOfG) against the face
+  EdgeEdgeFollow edge_edge;  ///< when kEdgeEdge
   double beta = 0.0;
   Eigen::Vector3d p_f = Eigen::Vector3d::Zero(), p_g = Eigen::Vector3d::Zero();
   ExtremalStatus status = ExtremalStatus::kNotConverged;
@@ -96,5 +130,22 @@ TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
                               const nurbs::NurbsSurface& g, const BodyPose& pose_g,
                               const SurfaceSurfaceExtremum& face,
                               const TrimEdges::Edge* from = nullptr, MaterialMemo* memo = nullptr);
+
+/// The distance between trimmed f and g measured on both faces' materials (g may be untrimmed:
+/// edges_g null, and then this is MeasureTrimmed), for a face extremum `face` of (f, g), as a
+/// local problem: min |a − b| over both materials near the contact `from` (the last measure; may
+/// be null). The face's extremum where its points lie on both materials; else the contact in
+/// the form it had, followed: an edge against the other face while its point there lies on that
+/// face's material, else the two edges; two edges while each edge constraint's multiplier is
+/// non-negative (neither face offers a nearer point), else the edge against the face that does.
+/// From a face (or nothing), the edge of the face the extremum left first, started at the loop
+/// point nearest it. Every switch is continuous in β: where an edge's point crosses the other
+/// face's edge it is the edges' extremum too (d ⟂ both edges), with the same β, and a multiplier
+/// changes sign where the two forms' extrema meet. Allocation free.
+TrimmedMeasure MeasureTrimmedPair(const TrimEdges& edges_f, const BodyPose& pose_f,
+                                  const nurbs::NurbsSurface& g, const TrimEdges* edges_g,
+                                  const BodyPose& pose_g, const SurfaceSurfaceExtremum& face,
+                                  const TrimmedMeasure* from, MaterialMemo* memo_f,
+                                  MaterialMemo* memo_g);
 
 }  // namespace tangent::contact

@@ -81,7 +81,8 @@ bool BodyContactTerm::Target(State* st, int id_x, int id_y) const {
   const Eigen::Vector4d seed = Eigen::Vector4d::Constant(0.5);
   // (The inner states stay active: the slot's own state is what a free slot clears.)
   if (st->trimmed) {
-    st->cut.emplace(fx->body, fx->edges, fy->body, fy->surface, seed, tracking_);
+    st->cut.emplace(fx->body, fx->edges, fy->body, fy->surface, seed, tracking_,
+                    fy->trim ? fy->edges : nullptr);
     static_cast<TrimmedContactTerm::State&>(*st->cut_state).Rebind(*fx->surface, *fy->surface);
   } else {
     st->plain.emplace(fx->body, fx->surface, fy->body, fy->surface, seed, tracking_);

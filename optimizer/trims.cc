@@ -1,5 +1,8 @@
 #include "optimizer/trims.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "contact/contact_jacobian.h"
 #include "nurbs/refinement.h"
 #include "optimizer/curve_rows.h"
@@ -139,21 +142,25 @@ void TrimConstraintTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
 TrimmedContactTerm::TrimmedContactTerm(int body_a, const nurbs::NurbsSurface* f,
                                        const nurbs::TrimmedDomain* trim, int body_b,
                                        const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed,
-                                       const ContactTracking& tracking)
+                                       const ContactTracking& tracking,
+                                       const nurbs::TrimmedDomain* trim_g)
     : body_a_(body_a),
       body_b_(body_b),
       g_(g),
       face_(body_a, f, body_b, g, seed, tracking),
-      edges_(std::make_shared<const contact::TrimEdges>(f, trim)) {}
+      edges_(std::make_shared<const contact::TrimEdges>(f, trim)),
+      edges_g_(trim_g ? std::make_shared<const contact::TrimEdges>(g, trim_g) : nullptr) {}
 
 TrimmedContactTerm::TrimmedContactTerm(int body_a, std::shared_ptr<const contact::TrimEdges> edges,
                                        int body_b, const nurbs::NurbsSurface* g,
-                                       const Eigen::Vector4d& seed, const ContactTracking& tracking)
+                                       const Eigen::Vector4d& seed, const ContactTracking& tracking,
+                                       std::shared_ptr<const contact::TrimEdges> edges_g)
     : body_a_(body_a),
       body_b_(body_b),
       g_(g),
       face_(body_a, &edges->surface(), body_b, g, seed, tracking),
-      edges_(std::move(edges)) {}
+      edges_(std::move(edges)),
+      edges_g_(std::move(edges_g)) {}
 
 std::unique_ptr<TermState> TrimmedContactTerm::MakeState() const {
   auto st = std::make_unique<State>();
@@ -168,29 +175,53 @@ void TrimmedContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   SurfaceContactTerm::State& face = st->face();
   face.active = true;
   face_.Update(poses, &face);
-  // The edge is followed from its last extremum while the contact stays on the same loop's
-  // edge (contact::MeasureTrimmed), else started at the loop point nearest the face's.
-  const bool was_on_edge = st->on_edge;
-  const contact::TrimmedMeasure m =
-      contact::MeasureTrimmed(*edges_, pa, *g_, pb, face.ext,
-                              was_on_edge && st->valid ? &st->edge : nullptr, &st->material);
+  // The edges are followed from the last measure while the contact keeps its form and loops
+  // (contact::MeasureTrimmedPair), else started at the loop points nearest the face's.
+  const contact::TrimmedForm was = st->measure.form;
+  st->measure = contact::MeasureTrimmedPair(*edges_, pa, *g_, edges_g_.get(), pb, face.ext,
+                                            st->valid ? &st->measure : nullptr, &st->material,
+                                            &st->material_g);
+  const contact::TrimmedMeasure& m = st->measure;
   st->on_edge = m.on_edge;
   st->reported = face.ext;
   if (st->on_edge) {
-    st->edge = m.edge;
     nurbs::SpanHint hint_g, hint_f;
-    int span = 0;
-    contact::EvaluateCurveSurface(*g_, pb, edges_->Curve(st->edge), pa, st->edge.u, &hint_g, &span,
-                                  &hint_f, &st->edge_eval);
-    // β = (E − G)·n along g's normal at an interior extremum of g, along the line between the
-    // points where the extremum is held on a bound (g's border, a joint of the loop).
+    int span = 0, span_b = 0;
+    switch (m.form) {
+      case contact::TrimmedForm::kEdgeOfF:
+        contact::EvaluateCurveSurface(*g_, pb, edges_->Curve(m.edge), pa, m.edge.u, &hint_g, &span,
+                                      &hint_f, &st->edge_eval);
+        // β = (E − G)·n along g's normal at an interior extremum of g, along the line between
+        // the points where the extremum is held on a bound (g's border, a joint of the loop).
+        st->row_direction = internal::CurveRowDirection(m.edge.ext);
+        st->reported.direction = st->row_direction;
+        break;
+      case contact::TrimmedForm::kEdgeOfG:
+        // g's edge E on body b against f's face F: the curve row's β = (E − F)·n_f, the same
+        // number as (p_f − p_g)·(−n_f).
+        contact::EvaluateCurveSurface(edges_->surface(), pa, edges_g_->Curve(m.edge), pb, m.edge.u,
+                                      &hint_f, &span, &hint_g, &st->edge_eval);
+        st->row_direction = internal::CurveRowDirection(m.edge.ext);
+        st->reported.direction = -st->row_direction;
+        break;
+      case contact::TrimmedForm::kEdgeEdge: {
+        const contact::EdgeEdgeFollow& ee = m.edge_edge;
+        contact::EvaluateCurveCurve(edges_->Curve(ee.loop_f, ee.piece_f), pa,
+                                    edges_g_->Curve(ee.loop_g, ee.piece_g), pb, ee.x, &span,
+                                    &hint_f, &span_b, &hint_g, &st->edge_edge_eval);
+        st->reported.direction = ee.nu;
+        ++st->edge_edge_evaluations;
+        break;
+      }
+      case contact::TrimmedForm::kFace:
+        break;
+    }
     st->reported.beta = m.beta;
     st->reported.p_f = m.p_f;
     st->reported.p_g = m.p_g;
     st->reported.status = m.status;
-    st->reported.direction = internal::CurveRowDirection(st->edge.ext);
   }
-  st->switches += st->valid && was_on_edge != st->on_edge;
+  st->switches += st->valid && was != m.form;
   st->tracked_steps = face.tracked_steps;
   st->solves = face.solves;
   st->lost = face.lost;
@@ -216,7 +247,20 @@ void TrimmedContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
   const BodyPose& pa = PoseOf(poses, body_a_);
   const BodyPose& pb = PoseOf(poses, body_b_);
   r[0] = st->reported.beta;
-  internal::CurveRowJacobian(st->edge_eval, st->reported.direction, pa, pb, J_a, J_b);
+  switch (st->measure.form) {
+    case contact::TrimmedForm::kEdgeOfF:
+      internal::CurveRowJacobian(st->edge_eval, st->row_direction, pa, pb, J_a, J_b);
+      break;
+    case contact::TrimmedForm::kEdgeOfG:  // the curve on body b, the surface on body a
+      internal::CurveRowJacobian(st->edge_eval, st->row_direction, pb, pa, J_b, J_a);
+      break;
+    default: {  // edge–edge: ∇β = ν·∂(a − b)/∂q at fixed parameters
+      const contact::Row14 g =
+          contact::EdgeEdgeGradient(st->edge_edge_eval, pa, pb, st->measure.edge_edge.nu);
+      J_a = g.head<7>();
+      J_b = g.tail<7>();
+    }
+  }
 }
 
 void TrimmedContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, TermState* state,
@@ -229,16 +273,55 @@ void TrimmedContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
     face_.AddWeightedHessian(poses, st->face_state.get(), w, h);
     return;
   }
-  // The edge: the curve row's Hessian (curve_rows.h) with E = f(c(τ)).
-  internal::AddCurveRowHessian(st->edge_eval, st->edge.ext, st->reported.direction,
-                               PoseOf(poses, body_a_), PoseOf(poses, body_b_), w[0], h);
+  const BodyPose& pa = PoseOf(poses, body_a_);
+  const BodyPose& pb = PoseOf(poses, body_b_);
+  const contact::TrimmedMeasure& m = st->measure;
+  switch (m.form) {
+    case contact::TrimmedForm::kEdgeOfF:  // the curve row's Hessian (curve_rows.h), E = f(c(τ))
+      internal::AddCurveRowHessian(st->edge_eval, m.edge.ext, st->row_direction, pa, pb, w[0], h);
+      break;
+    case contact::TrimmedForm::kEdgeOfG: {  // the same over (body b, body a), blocks swapped
+      TermHessian inner;
+      inner.SetZero();
+      internal::AddCurveRowHessian(st->edge_eval, m.edge.ext, st->row_direction, pb, pa, w[0],
+                                   &inner);
+      h->aa += inner.bb;
+      h->bb += inner.aa;
+      h->ab += inner.ab.transpose();
+      h->W_a += inner.W_b;
+      h->W_b += inner.W_a;
+      break;
+    }
+    default: {  // edge–edge: exact where both parameters are free (else Gauss–Newton)
+      const contact::EdgeEdgeFollow& ee = m.edge_edge;
+      contact::Matrix2x14 x_q;
+      if (!ee.common_normal || !contact::CurveCurveJacobian(st->edge_edge_eval, pa, pb, &x_q)) {
+        return;
+      }
+      internal::Split(contact::EdgeEdgeHessian(st->edge_edge_eval, pa, pb, x_q, ee.nu), w[0], h);
+    }
+  }
 }
 
 bool TrimmedContactTerm::Reach(const TermState* state, Eigen::Vector3d* p, double* reach) const {
   const auto* st = static_cast<const State*>(state);
   if (!st->active || !st->valid) return false;
   if (!st->on_edge) return face_.Reach(st->face_state.get(), p, reach);
-  return internal::CurveRowReach(st->edge_eval, st->edge.ext, p, reach);
+  const contact::TrimmedMeasure& m = st->measure;
+  if (m.form != contact::TrimmedForm::kEdgeEdge) {
+    return internal::CurveRowReach(st->edge_eval, m.edge.ext, p, reach);
+  }
+  // Two edges: the gap plus a quarter of the tighter edge's radius of curvature.
+  if (m.status != contact::ExtremalStatus::kConverged) return false;
+  double kappa = 0.0;
+  for (const nurbs::CurvePoint<3>* c : {&st->edge_edge_eval.a.world, &st->edge_edge_eval.b.world}) {
+    const double speed = c->C1.norm();
+    if (!(speed > 0.0)) return false;
+    kappa = std::max(kappa, c->C1.cross(c->C2).norm() / (speed * speed * speed));
+  }
+  *p = 0.5 * (m.p_f + m.p_g);
+  *reach = ContactReach(m.beta, kappa);
+  return std::isfinite(*reach);
 }
 
 std::shared_ptr<TrimConstraintTerm> MakeTrimConstraint(TrimForm form, int body_a,

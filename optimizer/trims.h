@@ -102,13 +102,16 @@ class TrimmedContactTerm final : public Term {
  public:
   struct State final : ContactSlotState {
     std::unique_ptr<TermState> face_state;  ///< the face contact's (a SurfaceContactTerm's)
-    contact::TrimEdges::Edge edge;          ///< the edge contact followed while on_edge
-    bool on_edge = false;                   ///< the last evaluation measured the edge
-    int64_t switches = 0;                   ///< face → edge and edge → face changes
-    contact::MaterialMemo material;         ///< the last face point found on the material
+    contact::TrimmedMeasure measure;        ///< the last measure: its form, the edge followed
+    bool on_edge = false;                   ///< the last evaluation measured an edge
+    int64_t switches = 0;                   ///< changes of form (face, either edge, edge–edge)
+    int64_t edge_edge_evaluations = 0;      ///< evaluations that measured two edges
+    contact::MaterialMemo material, material_g;  ///< the last face points found on each material
     Vector7d q_a, q_b;
     bool valid = false;
-    contact::CurveSurfaceEval edge_eval;
+    contact::CurveSurfaceEval edge_eval;                      ///< an edge against a face
+    contact::CurveCurveEval edge_edge_eval;                   ///< two edges'
+    Eigen::Vector3d row_direction = Eigen::Vector3d::Zero();  ///< the curve row's own n
     /// The contact as reported: the face pair's parameters, and β, points and direction of what
     /// is measured (the edge's while on_edge).
     contact::SurfaceSurfaceExtremum reported;
@@ -128,18 +131,26 @@ class TrimmedContactTerm final : public Term {
       face().Rebind(f, g);
       valid = false;
       on_edge = false;
+      measure.form = contact::TrimmedForm::kFace;
       material = {};
+      material_g = {};
     }
   };
-  /// The surfaces and the trim must outlive the term.
+  /// The surfaces and the trims must outlive the term. `trim_g`: g's trim when g is trimmed too
+  /// (null: g's whole surface is material); then the contact takes all four forms
+  /// (contact::MeasureTrimmedPair): on the faces, f's edge against g, g's edge against f, and
+  /// edge against edge, β = (a − b)·ν along the edges' common normal (contact/edge_edge.h).
   TrimmedContactTerm(int body_a, const nurbs::NurbsSurface* f, const nurbs::TrimmedDomain* trim,
                      int body_b, const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed,
-                     const ContactTracking& tracking = {});
-  /// The same with f's edges built already (`edges` on f and its trim): shared by the terms of
-  /// one face, and allocation free (a BodyContactTerm's slot moving between face pairs).
+                     const ContactTracking& tracking = {},
+                     const nurbs::TrimmedDomain* trim_g = nullptr);
+  /// The same with the edges built already (`edges` on f and its trim, `edges_g` on g and its
+  /// trim or null): shared by the terms of one face, and allocation free (a BodyContactTerm's
+  /// slot moving between face pairs).
   TrimmedContactTerm(int body_a, std::shared_ptr<const contact::TrimEdges> edges, int body_b,
                      const nurbs::NurbsSurface* g, const Eigen::Vector4d& seed,
-                     const ContactTracking& tracking = {});
+                     const ContactTracking& tracking = {},
+                     std::shared_ptr<const contact::TrimEdges> edges_g = nullptr);
 
   std::string name() const override { return "trimmed_contact"; }
   int dim() const override { return 1; }
@@ -161,7 +172,7 @@ class TrimmedContactTerm final : public Term {
   int body_a_, body_b_;
   const nurbs::NurbsSurface* g_;
   SurfaceContactTerm face_;
-  std::shared_ptr<const contact::TrimEdges> edges_;
+  std::shared_ptr<const contact::TrimEdges> edges_, edges_g_;
 };
 
 std::shared_ptr<TrimConstraintTerm> MakeTrimConstraint(TrimForm form, int body_a,

@@ -132,13 +132,14 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
                          ? lines_.AddPair(&p, f.body, &f.surface, g.body, &g.surface)
                          : -1;
     for (int m = 0; m < pair.max_contacts; ++m) {
-      // On a trimmed pair the contact measures only the material (the trimmed surface as the
-      // term's f; with both trimmed, the first one's trim: docs/trimming.md).
+      // On a trimmed pair the contact measures only the material (a trimmed surface as the
+      // term's f; with both trimmed, both materials, edge against edge too: docs/trimming.md).
       Slot slot{lo, hi, 0, false, false, nullptr};
       const Eigen::Vector4d seed = Eigen::Vector4d::Constant(0.5);
       if (f.trim) {
         slot.term = std::make_shared<optimizer::TrimmedContactTerm>(
-            f.body, &f.surface, &*f.trim, g.body, &g.surface, seed, options.tracking);
+            f.body, &f.surface, &*f.trim, g.body, &g.surface, seed, options.tracking,
+            g.trim ? &*g.trim : nullptr);
       } else if (g.trim) {
         slot.swapped = true;
         slot.term = std::make_shared<optimizer::TrimmedContactTerm>(

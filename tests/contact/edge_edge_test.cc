@@ -187,6 +187,85 @@ TEST(EdgeEdgeTest, JacobianGradientAndHessianMatchFiniteDifferences) {
   }
 }
 
+// The signed row β = d·ν along the edges' common normal: equal to ±|d| apart, smooth through
+// touching (|d| is not), and its gradient and Hessian against differences of re-solved β and of
+// the analytic gradient, apart, touching and 2 mm into each other.
+TEST(EdgeEdgeTest, TheSignedRowIsSmoothThroughTouching) {
+  const Scene s;
+  const BodyPose pa0 = BodyPose::FromCoordinates(s.q_a);
+  BodyPose pb0 = BodyPose::FromCoordinates(s.QB(0.0));
+  double sampled = 0.0;
+  CurveCurveExtremum apart =
+      SolveCurveCurve(s.rim, pa0, s.edge, pb0, SampledClosest(s, pa0, pb0, &sampled));
+  ASSERT_EQ(apart.status, ExtremalStatus::kConverged);
+  // The scene's edges cross at 8°, where the parameters move 50 times faster than the poses
+  // (x_q ~ 1/sin²): B turned 40° about the common normal through its point crosses them at 48°.
+  const Eigen::AngleAxisd turn(0.7, (apart.p_a - apart.p_b).normalized());
+  Vector7d qb0 = s.QB(0.0);
+  const Eigen::Quaterniond q0(qb0[3], qb0[4], qb0[5], qb0[6]);
+  qb0 = Coordinates(apart.p_b + turn * (qb0.head<3>() - apart.p_b), Eigen::Quaterniond(turn) * q0);
+  pb0 = BodyPose::FromCoordinates(qb0);
+  apart = SolveCurveCurve(s.rim, pa0, s.edge, pb0, SampledClosest(s, pa0, pb0, &sampled));
+  ASSERT_EQ(apart.status, ExtremalStatus::kConverged);
+  const Eigen::Vector3d down = (apart.p_a - apart.p_b).normalized();  // moves B towards A
+  double worst_grad = 0.0, worst_hess = 0.0;
+  // Pushed in, the rim's curvature along d lowers H's first pivot (d·a'' < 0): 0.2 mm in, the
+  // pair is 6 times nearer its fold (det H → 0) than touching. The servo's rows stay within
+  // 1e-6 m of touching; 20 µm in is checked, with differences of 2e-7 (x_q ~ 30 there).
+  constexpr double h = 2e-7;
+  for (const double gap : {0.003, 0.0, -2e-5}) {
+    Vector7d qb = qb0;
+    qb.head<3>() += down * (apart.distance - gap);
+    const Vector7d qa = s.q_a;
+    const BodyPose pa = BodyPose::FromCoordinates(qa), pb = BodyPose::FromCoordinates(qb);
+    CurveCurveEval at;
+    const CurveCurveExtremum e = SolveCurveCurve(s.rim, pa, s.edge, pb, apart.x, {}, &at);
+    ASSERT_EQ(e.status, ExtremalStatus::kConverged) << "gap " << gap;
+    const double angle =
+        std::asin(at.a.world.C1.normalized().cross(at.b.world.C1.normalized()).norm());
+    EXPECT_GT(angle, 0.5) << "gap " << gap;
+
+    // σ: ν from B's edge towards A's where they were apart.
+    Eigen::Vector3d nu;
+    ASSERT_TRUE(CommonNormal(at, 1.0, &nu));
+    const double sign = nu.dot(down) >= 0.0 ? 1.0 : -1.0;
+    ASSERT_TRUE(CommonNormal(at, sign, &nu));
+    const double beta = at.d.dot(nu);
+    EXPECT_NEAR(beta, gap, 1e-12) << "gap " << gap;
+    EXPECT_NEAR(std::abs(beta), e.distance, 1e-15);
+    Matrix2x14 x_q;
+    ASSERT_TRUE(CurveCurveJacobian(at, pa, pb, &x_q));
+    const Row14 grad = EdgeEdgeGradient(at, pa, pb, nu);
+    const Matrix14d hess = EdgeEdgeHessian(at, pa, pb, x_q, nu);
+    Row14 fd_grad;
+    Matrix14d fd_hess;
+    for (int i = 0; i < 14; ++i) {
+      double b[2];
+      Row14 g[2];
+      for (int k = 0; k < 2; ++k) {
+        Vector7d a = qa, bq = qb;
+        (i < 7 ? a[i] : bq[i - 7]) += (k == 0 ? h : -h);
+        const BodyPose qa_k = BodyPose::FromCoordinates(a), qb_k = BodyPose::FromCoordinates(bq);
+        CurveCurveEval ek;
+        SolveCurveCurve(s.rim, qa_k, s.edge, qb_k, e.x, {}, &ek);
+        Eigen::Vector3d nk;
+        ASSERT_TRUE(CommonNormal(ek, sign, &nk));
+        b[k] = ek.d.dot(nk);
+        g[k] = EdgeEdgeGradient(ek, qa_k, qb_k, nk);
+      }
+      fd_grad[i] = (b[0] - b[1]) / (2 * h);
+      fd_hess.col(i) = (g[0] - g[1]).transpose() / (2 * h);
+    }
+    EXPECT_LT(RelError(grad, fd_grad), kRelTol) << "gap " << gap;
+    EXPECT_LT(RelError(hess, fd_hess), kRelTol) << "gap " << gap;
+    EXPECT_LT(RelError(hess, hess.transpose()), 1e-9) << "gap " << gap;
+    worst_grad = std::max(worst_grad, RelError(grad, fd_grad));
+    worst_hess = std::max(worst_hess, RelError(hess, fd_hess));
+  }
+  std::printf("signed row, apart, touching and crossed: gradient %.1e, Hessian %.1e relative\n",
+              worst_grad, worst_hess);
+}
+
 TEST(EdgeEdgeTest, ParallelEdgesHaveNoJacobian) {
   // Two straight edges on two flat faces, parallel and 1 cm apart: a continuum of closest pairs.
   const nurbs::NurbsSurface plane = nurbs::MakePlanePatch({0, 0, 0}, {0.1, 0, 0}, {0, 0.1, 0});
