@@ -207,6 +207,11 @@ void EvaluateCurveSurface(const nurbs::NurbsSurface& f, const BodyPose& pose_f, 
                           const BodyPose& pose_g, const Eigen::Vector3d& u, nurbs::SpanHint* hint_f,
                           int* span_g, nurbs::SpanHint* hint_g, CurveSurfaceEval* out);
 
+/// The form a contact between trimmed faces takes (contact/trimmed.h; seed 001's three trimming
+/// constraints, with either face's edge): the faces' extremum, f's edge against g's face, g's
+/// edge against f's face, or f's edge against g's edge.
+enum class TrimmedForm { kFace, kEdgeOfF, kEdgeOfG, kEdgeEdge };
+
 struct CurveSurfaceExtremum {
   Eigen::Vector3d u = Eigen::Vector3d::Zero();  ///< (u, v) on f, τ on the curve
   /// (g − f)·n_f: > 0 when the curve is outside f (m); at a boundary extremum |g − f| signed by

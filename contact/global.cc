@@ -576,6 +576,9 @@ constexpr double kTrackedResidual = 1e-9;
 // trimmed the two edges' (contact/trimmed.h), with its distance and points in (a, b) order.
 struct OnMaterial {
   bool on_edge = false;
+  /// Where the points lie (PointParameters): with both surfaces trimmed, what the contact is
+  /// tracked by; else the face extremum's parameters.
+  Eigen::Vector4d u = Eigen::Vector4d::Zero();
   double beta = 0.0;
   Eigen::Vector3d p_a = Eigen::Vector3d::Zero(), p_b = Eigen::Vector3d::Zero();
   ExtremalStatus status = ExtremalStatus::kNotConverged;
@@ -583,21 +586,22 @@ struct OnMaterial {
 OnMaterial MeasureOnMaterial(const Watched& wa, const BodyPose& pa, const Watched& wb,
                              const BodyPose& pb, const SurfaceSurfaceExtremum& e) {
   if (wa.edges && wb.edges) {
-    const TrimmedMeasure t = MeasureTrimmedPair(*wa.edges, pa, *wb.s.surface, wb.edges.get(), pb, e,
-                                                nullptr, nullptr, nullptr);
-    return {t.on_edge, t.beta, t.p_f, t.p_g, t.status};
+    const TrimmedMeasure t = MeasureTrimmedPair(*wa.edges, pa, *wb.s.surface, wb.edges.get(), pb,
+                                                &e, nullptr, nullptr, nullptr);
+    return {t.on_edge, PointParameters(*wa.edges, *wb.edges, t, e.u), t.beta, t.p_f, t.p_g,
+            t.status};
   }
   if (wa.edges) {
     const TrimmedMeasure t = MeasureTrimmed(*wa.edges, pa, *wb.s.surface, pb, e);
-    if (t.on_edge) return {true, t.beta, t.p_f, t.p_g, t.status};
+    if (t.on_edge) return {true, e.u, t.beta, t.p_f, t.p_g, t.status};
   }
   if (wb.edges) {
     SurfaceSurfaceExtremum swapped = e;
     swapped.u << e.u.tail<2>(), e.u.head<2>();
     const TrimmedMeasure t = MeasureTrimmed(*wb.edges, pb, *wa.s.surface, pa, swapped);
-    if (t.on_edge) return {true, t.beta, t.p_g, t.p_f, t.status};
+    if (t.on_edge) return {true, e.u, t.beta, t.p_g, t.p_f, t.status};
   }
-  return {false, e.beta, e.p_f, e.p_g, e.status};
+  return {false, e.u, e.beta, e.p_f, e.p_g, e.status};
 }
 
 // A face extremum on the material held on its surface's border (ExtremalStatus::kAtBoundary,
@@ -669,7 +673,7 @@ void RefineClusters(const GlobalContactStage::Impl& m, const GlobalOptions& opti
       MinimaBeside(*wa.s.surface, pa, *wb.s.surface, pb, e, at, rc, options, a, b, found);
       continue;
     }
-    AddFound({a, b, e.u, on.beta, on.p_a, on.p_b}, found);
+    AddFound({a, b, on.u, on.beta, on.p_a, on.p_b}, found);
   }
 }
 
@@ -738,16 +742,25 @@ void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
     // (Newton from an extremum that is nearly degenerate, as where two wires turn parallel,
     // can take one step far away.)
     SurfacePairEval at;
-    SurfaceSurfaceExtremum e =
-        ExtremumAt(*wa.s.surface, pa, *wb.s.surface, pb, c.u, kTrackedResidual, &at);
+    SurfaceSurfaceExtremum e;
     bool jumped = false;
-    if (e.status != ExtremalStatus::kConverged) {
-      const double held_distance = at.d.norm();
-      e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, c.u, kContinuation, &at);
-      jumped = FoundAnotherExtremum(*wa.s.surface, *wb.s.surface, c.u, e, held_distance);
+    OnMaterial on;
+    TrimmedMeasure edge;
+    if (wa.edges && wb.edges && MeasureTrimmedPairAt(*wa.edges, pa, *wb.edges, pb, c.u, &edge)) {
+      // Two trimmed faces tracked at an edge contact's points: re-measured in its own form.
+      e.u = c.u;
+      e.status = ExtremalStatus::kConverged;
+      on = {true, c.u, edge.beta, edge.p_f, edge.p_g, edge.status};
+    } else {
+      e = ExtremumAt(*wa.s.surface, pa, *wb.s.surface, pb, c.u, kTrackedResidual, &at);
+      if (e.status != ExtremalStatus::kConverged) {
+        const double held_distance = at.d.norm();
+        e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, c.u, kContinuation, &at);
+        jumped = FoundAnotherExtremum(*wa.s.surface, *wb.s.surface, c.u, e, held_distance);
+      }
+      // On trimmed surfaces: the edge contact where the face's point lies off the material.
+      on = MeasureOnMaterial(wa, pa, wb, pb, e);
     }
-    // On trimmed surfaces: the edge contact where the face's point lies off the material.
-    const OnMaterial on = MeasureOnMaterial(wa, pa, wb, pb, e);
     if (on.on_edge && !jumped && e.status != ExtremalStatus::kNotConverged) {
       e.status = on.status;
       e.beta = on.beta;

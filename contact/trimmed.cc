@@ -1,5 +1,7 @@
 #include "contact/trimmed.h"
 
+#include <cmath>
+
 #include "nurbs/refinement.h"
 
 namespace tangent::contact {
@@ -277,27 +279,32 @@ TrimmedMeasure EdgeMeasure(const TrimEdges::Edge& e, bool of_g) {
 
 TrimmedMeasure MeasureTrimmedPair(const TrimEdges& edges_f, const BodyPose& pose_f,
                                   const nurbs::NurbsSurface& g, const TrimEdges* edges_g,
-                                  const BodyPose& pose_g, const SurfaceSurfaceExtremum& face,
+                                  const BodyPose& pose_g, const SurfaceSurfaceExtremum* face,
                                   const TrimmedMeasure* from, MaterialMemo* memo_f,
                                   MaterialMemo* memo_g) {
   const TrimmedForm was = from ? from->form : TrimmedForm::kFace;
   if (!edges_g) {
-    TrimmedMeasure m = MeasureTrimmed(edges_f, pose_f, g, pose_g, face,
+    TrimmedMeasure m = MeasureTrimmed(edges_f, pose_f, g, pose_g, *face,
                                       was == TrimmedForm::kEdgeOfF ? &from->edge : nullptr, memo_f);
     m.form = m.on_edge ? TrimmedForm::kEdgeOfF : TrimmedForm::kFace;
     return m;
   }
   const nurbs::NurbsSurface& f = edges_f.surface();
-  // The faces' extremum where its points lie on both materials.
+  // The faces' extremum where its points lie on both materials. (Without it, an edge contact
+  // followed says by its multiplier when the faces should be solved: face_wanted.)
   nurbs::TrimmedDomain::Closest near_f, near_g;
-  const bool on_f = MaterialAt(edges_f, face.u.head<2>(), memo_f, &near_f);
-  const bool on_g = MaterialAt(*edges_g, face.u.tail<2>(), memo_g, &near_g);
-  if (on_f && on_g) {
+  const bool on_f = face && MaterialAt(edges_f, face->u.head<2>(), memo_f, &near_f);
+  const bool on_g = face && MaterialAt(*edges_g, face->u.tail<2>(), memo_g, &near_g);
+  // An edge contact is left for the face only at an extremum (a face term held where it jumped,
+  // or reseeded at an edge contact's points, is not one).
+  const bool extremum = face && (face->status == ExtremalStatus::kConverged ||
+                                 face->status == ExtremalStatus::kSingular);
+  if (face && on_f && on_g && (extremum || was == TrimmedForm::kFace)) {
     TrimmedMeasure m;
-    m.beta = face.beta;
-    m.p_f = face.p_f;
-    m.p_g = face.p_g;
-    m.status = face.status;
+    m.beta = face->beta;
+    m.p_f = face->p_f;
+    m.p_g = face->p_g;
+    m.status = face->status;
     return m;
   }
   // Else an edge contact, followed in its own form while it holds (seed 001's constraints as a
@@ -339,12 +346,27 @@ TrimmedMeasure MeasureTrimmedPair(const TrimEdges& edges_f, const BodyPose& pose
     if (was != TrimmedForm::kFace) {
       e = from->edge;
     } else {
-      const Eigen::Vector2d theirs_uv = of_g ? face.u.head<2>() : face.u.tail<2>();
+      const Eigen::Vector2d theirs_uv = of_g ? face->u.head<2>() : face->u.tail<2>();
       mine.StartNear(of_g ? near_g : near_f, theirs.surface(), pose_theirs, pose_mine, theirs_uv,
                      &e);
     }
     mine.Solve(theirs.surface(), pose_theirs, pose_mine, &e);
-    if (MaterialAt(theirs, e.ext.u.head<2>(), nullptr, &near)) return EdgeMeasure(e, of_g);
+    if (MaterialAt(theirs, e.ext.u.head<2>(), nullptr, &near)) {
+      TrimmedMeasure m = EdgeMeasure(e, of_g);
+      // Its own edge constraint's multiplier: moving the edge's point into its material by ε
+      // changes β = (E − G)·n by ε n·m (n the other face's normal there). Negative: the face
+      // offers a nearer point, and the faces' extremum should be solved from here.
+      if (!face && !e.ext.at_bound[0] && !e.ext.at_bound[1] && !e.ext.at_bound[2]) {
+        int span = 0;
+        nurbs::SpanHint hint;
+        const Eigen::Vector3d tangent =
+            pose_mine.R_WB * mine.Curve(e).Evaluate(e.u[2], &span, &hint).C1;
+        const Eigen::Vector3d into =
+            IntoMaterial(mine, e.loop, e.piece, e.u[2], pose_mine, tangent);
+        m.face_wanted = e.ext.R_WCf.col(2).dot(into) < 0.0;
+      }
+      return m;
+    }
     // Its point left the other face's material: the two edges, from the edge's point and the
     // other loop's point nearest the point it left for. β's side: the face's normal.
     const int piece = theirs.PieceOf(near);
@@ -374,6 +396,76 @@ TrimmedMeasure MeasureTrimmedPair(const TrimEdges& edges_f, const BodyPose& pose
   m.beta = (m.p_f - m.p_g).dot(ee.nu);
   m.status = ee.ext.status;
   return m;
+}
+
+Eigen::Vector4d PointParameters(const TrimEdges& edges_f, const TrimEdges& edges_g,
+                                const TrimmedMeasure& m, const Eigen::Vector4d& face_u) {
+  Eigen::Vector4d u = face_u;
+  switch (m.form) {
+    case TrimmedForm::kEdgeOfF:  // the solver's surface is g: its (s, t), then τ on f's edge
+      u << PieceUv(edges_f, m.edge.loop, m.edge.piece, m.edge.u[2]), m.edge.ext.u.head<2>();
+      break;
+    case TrimmedForm::kEdgeOfG:
+      u << m.edge.ext.u.head<2>(), PieceUv(edges_g, m.edge.loop, m.edge.piece, m.edge.u[2]);
+      break;
+    case TrimmedForm::kEdgeEdge: {
+      const EdgeEdgeFollow& ee = m.edge_edge;
+      u << PieceUv(edges_f, ee.loop_f, ee.piece_f, ee.x[0]),
+          PieceUv(edges_g, ee.loop_g, ee.piece_g, ee.x[1]);
+      break;
+    }
+    case TrimmedForm::kFace:
+      break;
+  }
+  return u;
+}
+
+bool MeasureTrimmedPairAt(const TrimEdges& edges_f, const BodyPose& pose_f,
+                          const TrimEdges& edges_g, const BodyPose& pose_g,
+                          const Eigen::Vector4d& u, TrimmedMeasure* m) {
+  constexpr double kOnLoop = 1e-9;  // parameter units: an edge point is its loop's point exactly
+  const nurbs::TrimmedDomain::Closest near_f = edges_f.trim().Nearest(u.head<2>());
+  const nurbs::TrimmedDomain::Closest near_g = edges_g.trim().Nearest(u.tail<2>());
+  const bool on_f = near_f.loop >= 0 && std::abs(near_f.signed_distance) <= kOnLoop;
+  const bool on_g = near_g.loop >= 0 && std::abs(near_g.signed_distance) <= kOnLoop;
+  if (!on_f && !on_g) return false;
+  if (on_f && on_g) {
+    // β's side: along g's normal and against f's (the edge forms' conventions).
+    auto normal = [](const TrimEdges& e, const Eigen::Vector2d& uv, const BodyPose& pose) {
+      const nurbs::SurfacePoint p = e.surface().Evaluate(uv[0], uv[1], 1);
+      return Eigen::Vector3d(pose.R_WB * p.S_u.cross(p.S_v).normalized());
+    };
+    const Eigen::Vector3d side =
+        normal(edges_g, u.tail<2>(), pose_g) - normal(edges_f, u.head<2>(), pose_f);
+    EdgeEdgeFollow ee;
+    ee.loop_f = near_f.loop;
+    ee.piece_f = edges_f.PieceOf(near_f);
+    ee.loop_g = near_g.loop;
+    ee.piece_g = edges_g.PieceOf(near_g);
+    ee.x << near_f.t, near_g.t;
+    SolveEdgeEdge(edges_f, pose_f, edges_g, pose_g, side, &ee);
+    *m = TrimmedMeasure();
+    m->on_edge = true;
+    m->form = TrimmedForm::kEdgeEdge;
+    m->edge_edge = ee;
+    m->p_f = ee.ext.p_a;
+    m->p_g = ee.ext.p_b;
+    m->beta = (m->p_f - m->p_g).dot(ee.nu);
+    m->status = ee.ext.status;
+    return true;
+  }
+  if (on_f) {
+    TrimEdges::Edge e =
+        EdgeAt(edges_f, near_f.loop, edges_f.PieceOf(near_f), near_f.t, u.tail<2>());
+    edges_f.Solve(edges_g.surface(), pose_g, pose_f, &e);
+    *m = EdgeMeasure(e, false);
+  } else {
+    TrimEdges::Edge e =
+        EdgeAt(edges_g, near_g.loop, edges_g.PieceOf(near_g), near_g.t, u.head<2>());
+    edges_g.Solve(edges_f.surface(), pose_f, pose_g, &e);
+    *m = EdgeMeasure(e, true);
+  }
+  return true;
 }
 
 }  // namespace tangent::contact

@@ -85,11 +85,6 @@ class TrimEdges {
 /// f's untrimmed border off the material), the nearest edge's against g. β > 0 apart. The edge
 /// is followed from `from` (an earlier measure's edge) when that is on the loop nearest the face
 /// point, else started there (TrimEdges::StartNear). Allocation free.
-/// The form a contact between trimmed faces takes (seed 001's three trimming constraints, with
-/// either face's edge): the faces' extremum, f's edge against g's face, g's edge against f's face,
-/// or f's edge against g's edge.
-enum class TrimmedForm { kFace, kEdgeOfF, kEdgeOfG, kEdgeEdge };
-
 /// An edge–edge contact followed (docs/trimming.md, "Edge against edge"): a piece of f's loops
 /// and one of g's, (τ_f, τ_g), and ν, the direction β is measured along (the common normal
 /// σ(a' × b')/|a' × b'| from g's edge towards f's; ±d/|d| where the extremum is held at a joint
@@ -113,6 +108,9 @@ struct TrimmedMeasure {
   bool on_edge = false;
   TrimmedForm form = TrimmedForm::kFace;
   TrimEdges::Edge edge;  ///< when on_edge: f's edge (kEdgeOfF) or g's (kEdgeOfG) against the face
+  /// Measured without the faces' extremum (MeasureTrimmedPair's `face` null), an edge against a
+  /// face whose multiplier says the face offers a nearer point: solve the faces from here.
+  bool face_wanted = false;
   EdgeEdgeFollow edge_edge;  ///< when kEdgeEdge
   double beta = 0.0;
   Eigen::Vector3d p_f = Eigen::Vector3d::Zero(), p_g = Eigen::Vector3d::Zero();
@@ -132,7 +130,9 @@ TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
                               const TrimEdges::Edge* from = nullptr, MaterialMemo* memo = nullptr);
 
 /// The distance between trimmed f and g measured on both faces' materials (g may be untrimmed:
-/// edges_g null, and then this is MeasureTrimmed), for a face extremum `face` of (f, g), as a
+/// edges_g null, and then this is MeasureTrimmed), for a face extremum `face` of (f, g) (null
+/// only with both trimmed and `from` an edge form: then an edge against a face whose own
+/// multiplier turns negative reports face_wanted, and the caller solves the faces), as a
 /// local problem: min |a − b| over both materials near the contact `from` (the last measure; may
 /// be null). The face's extremum where its points lie on both materials; else the contact in
 /// the form it had, followed: an edge against the other face while its point there lies on that
@@ -144,8 +144,23 @@ TrimmedMeasure MeasureTrimmed(const TrimEdges& edges, const BodyPose& pose_f,
 /// changes sign where the two forms' extrema meet. Allocation free.
 TrimmedMeasure MeasureTrimmedPair(const TrimEdges& edges_f, const BodyPose& pose_f,
                                   const nurbs::NurbsSurface& g, const TrimEdges* edges_g,
-                                  const BodyPose& pose_g, const SurfaceSurfaceExtremum& face,
+                                  const BodyPose& pose_g, const SurfaceSurfaceExtremum* face,
                                   const TrimmedMeasure* from, MaterialMemo* memo_f,
                                   MaterialMemo* memo_g);
+
+/// Where a contact between two trimmed faces has its points on the faces: (u, v) of p_f on f and
+/// (s, t) of p_g on g. A face contact's are its own parameters (`face_u`); an edge point's are
+/// its loop's point in the domain. The servo reports, and the global stage tracks, such a
+/// contact by these: the faces' extremum can lie anywhere off both materials, and two edge
+/// contacts of one face pair (an edge crossing a rim twice) share it.
+Eigen::Vector4d PointParameters(const TrimEdges& edges_f, const TrimEdges& edges_g,
+                                const TrimmedMeasure& m, const Eigen::Vector4d& face_u);
+/// The contact whose points lie at `u` (PointParameters), measured in its own form: a point on
+/// its face's loop (within 1e-9 of the domain) is an edge point, seeded there. False (nothing
+/// measured) when neither point lies on its loop: a face contact, which the caller solves.
+/// Allocation free.
+bool MeasureTrimmedPairAt(const TrimEdges& edges_f, const BodyPose& pose_f,
+                          const TrimEdges& edges_g, const BodyPose& pose_g,
+                          const Eigen::Vector4d& u, TrimmedMeasure* m);
 
 }  // namespace tangent::contact

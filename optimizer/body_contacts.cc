@@ -98,6 +98,7 @@ void BodyContactTerm::State::SumCounters() {
   solves = p.solves + c.solves;
   lost = p.lost + c.lost;
   jumps = p.jumps + c.jumps;
+  form = trimmed ? c.form : contact::TrimmedForm::kFace;
 }
 
 void BodyContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState* state,

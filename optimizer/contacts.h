@@ -27,6 +27,9 @@ struct ContactSlotState : TermState {
   /// at its last parameters (β = d·n there, continuous in the poses) until the global stage
   /// re-finds the contact.
   int64_t jumps = 0;
+  /// Which form the contact took at the last evaluation (contact::TrimmedForm): kFace but on
+  /// trimmed pairs, where an edge against a face, or two edges, may hold it.
+  contact::TrimmedForm form = contact::TrimmedForm::kFace;
   /// The contact at the last evaluated poses: the face pair's parameters (u, v, s, t) (what
   /// Reseed takes), the distance β it is held to and the two points it is measured between.
   virtual const contact::SurfaceSurfaceExtremum& extremum() const = 0;

@@ -174,13 +174,30 @@ void TrimmedContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   if (st->valid && SamePose(pa.q, st->q_a) && SamePose(pb.q, st->q_b)) return;
   SurfaceContactTerm::State& face = st->face();
   face.active = true;
-  face_.Update(poses, &face);
   // The edges are followed from the last measure while the contact keeps its form and loops
   // (contact::MeasureTrimmedPair), else started at the loop points nearest the face's.
   const contact::TrimmedForm was = st->measure.form;
-  st->measure = contact::MeasureTrimmedPair(*edges_, pa, *g_, edges_g_.get(), pb, face.ext,
-                                            st->valid ? &st->measure : nullptr, &st->material,
-                                            &st->material_g);
+  // Reseeded at a contact's points (a global-stage event) on two trimmed faces: that contact, in
+  // its own form, is the one followed.
+  const bool seeded =
+      st->seeded && edges_g_ &&
+      contact::MeasureTrimmedPairAt(*edges_, pa, *edges_g_, pb, st->reported.u, &st->measure);
+  st->seeded = false;
+  const bool follow = st->valid || seeded;
+  // With both faces trimmed an edge contact is followed, and left, on its own (its
+  // multipliers): the faces' extremum, which can wander far off both materials, is solved only
+  // when the contact may return to the faces.
+  const bool edge_followed = edges_g_ && follow && st->measure.form != contact::TrimmedForm::kFace;
+  if (!edge_followed) face_.Update(poses, &face);
+  st->measure = contact::MeasureTrimmedPair(
+      *edges_, pa, *g_, edges_g_.get(), pb, edge_followed ? nullptr : &face.ext,
+      follow ? &st->measure : nullptr, &st->material, &st->material_g);
+  if (st->measure.face_wanted) {
+    face.Reseed(contact::PointParameters(*edges_, *edges_g_, st->measure, face.ext.u));
+    face_.Update(poses, &face);
+    st->measure = contact::MeasureTrimmedPair(*edges_, pa, *g_, edges_g_.get(), pb, &face.ext,
+                                              &st->measure, &st->material, &st->material_g);
+  }
   const contact::TrimmedMeasure& m = st->measure;
   st->on_edge = m.on_edge;
   st->reported = face.ext;
@@ -216,12 +233,14 @@ void TrimmedContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
       case contact::TrimmedForm::kFace:
         break;
     }
+    if (edges_g_) st->reported.u = contact::PointParameters(*edges_, *edges_g_, m, face.ext.u);
     st->reported.beta = m.beta;
     st->reported.p_f = m.p_f;
     st->reported.p_g = m.p_g;
     st->reported.status = m.status;
   }
   st->switches += st->valid && was != m.form;
+  st->form = m.form;
   st->tracked_steps = face.tracked_steps;
   st->solves = face.solves;
   st->lost = face.lost;

@@ -112,8 +112,9 @@ class TrimmedContactTerm final : public Term {
     contact::CurveSurfaceEval edge_eval;                      ///< an edge against a face
     contact::CurveCurveEval edge_edge_eval;                   ///< two edges'
     Eigen::Vector3d row_direction = Eigen::Vector3d::Zero();  ///< the curve row's own n
-    /// The contact as reported: the face pair's parameters, and β, points and direction of what
-    /// is measured (the edge's while on_edge).
+    /// The contact as reported: the face pair's parameters (with both faces trimmed, where its
+    /// points lie: contact::PointParameters), and β, points and direction of what is measured
+    /// (the edge's while on_edge).
     contact::SurfaceSurfaceExtremum reported;
     SurfaceContactTerm::State& face() const {
       return static_cast<SurfaceContactTerm::State&>(*face_state);
@@ -123,7 +124,11 @@ class TrimmedContactTerm final : public Term {
       face().Reseed(u_new);
       reported.u = u_new;
       valid = false;
+      seeded = true;
     }
+    /// Reseeded: with both faces trimmed, the contact is first measured in the form its points
+    /// (reported.u, contact::PointParameters) say.
+    bool seeded = false;
     /// The state of a term on another face pair (a BodyContactTerm's slot moved): the face
     /// contact rebound, no edge followed, nothing remembered of the material. Reseed next.
     /// Allocation free.
@@ -131,6 +136,7 @@ class TrimmedContactTerm final : public Term {
       face().Rebind(f, g);
       valid = false;
       on_edge = false;
+      seeded = false;
       measure.form = contact::TrimmedForm::kFace;
       material = {};
       material_g = {};

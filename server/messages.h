@@ -40,6 +40,9 @@ struct TrackedContact {
   double beta = 0.0;
   double p_a[3] = {0, 0, 0}, p_b[3] = {0, 0, 0};
   double force = 0.0;  ///< multiplier, N
+  /// contact::TrimmedForm: 0 the faces, 1 or 2 a trim edge of one surface against the other's
+  /// face, 3 edge against edge (trimmed pairs only).
+  int32_t form = 0;
 };
 
 /// Servo → global stage and LCM bridge: the configuration and the tracked contacts.

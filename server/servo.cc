@@ -734,6 +734,7 @@ void ServoLoop::FillSnapshot(Snapshot* s) const {
     const Eigen::Vector3d p_a = slot.PointA(), p_b = slot.PointB();
     for (int i = 0; i < 4; ++i) c.u[i] = u[i];
     c.beta = slot.state->extremum().beta;
+    c.form = static_cast<int32_t>(slot.state->form);
     for (int i = 0; i < 3; ++i) {
       c.p_a[i] = p_a[i];
       c.p_b[i] = p_b[i];
