@@ -23,7 +23,9 @@ struct GlobalSurface {
   /// the material only, as face contacts there and as edge contacts (the trim edge against the
   /// other surface, contact/trimmed.h) where the face's extremal point lies off it. A contact's
   /// `u` stays the face pair's parameters (what a tracked contact is reseeded from); its β and
-  /// points are the measured ones.
+  /// points are the measured ones. With both surfaces of a pair trimmed, `u` is where the
+  /// points lie (contact::PointParameters), and a tracked contact is re-measured in its own form
+  /// from there (edge on a face, or two edges: contact::MeasureTrimmedPairAt).
   const nurbs::TrimmedDomain* trim = nullptr;
 };
 
