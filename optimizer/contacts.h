@@ -127,6 +127,9 @@ class SurfaceContactTerm final : public Term {
   int dim() const override { return 1; }
   int body_a() const override { return body_f_; }
   int body_b() const override { return body_g_; }
+  bool Idle(const TermState* state) const override {
+    return !static_cast<const State*>(state)->active;
+  }
   void Evaluate(const std::vector<BodyPose>& poses, TermState* /*state*/,
                 Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                 Eigen::Ref<Eigen::MatrixXd> J_b) const override;

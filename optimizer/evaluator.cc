@@ -70,7 +70,11 @@ void ProblemEvaluator::EvaluateKinds(const Eigen::VectorXd& q, int first, int la
     }
   }
   for (int k = first; k <= last; ++k) {
-    for (const Item& it : items_[k]) {
+    for (Item& it : items_[k]) {
+      // An idle row (a free contact slot) is written once: its value and Jacobian stay.
+      const bool idle = it.term->Idle(it.state);
+      if (idle && it.idle) continue;
+      it.idle = idle;
       auto ja = J_a_[k].middleRows(it.row, it.dim);
       auto jb = J_b_[k].middleRows(it.row, it.dim);
       it.term->Evaluate(poses_, it.state, values_[k].segment(it.row, it.dim), ja, jb);
@@ -143,6 +147,7 @@ void ProblemEvaluator::AddJacobianTransposeTimes(Kind kind, const Eigen::VectorX
   const JacobianRows& Ja = J_a_[kind];
   const JacobianRows& Jb = J_b_[kind];
   for (const Item& it : items_[kind]) {
+    if (it.idle) continue;  // zero rows
     Vector7d ga = Vector7d::Zero(), gb = Vector7d::Zero();
     for (int r = it.row; r < it.row + it.dim; ++r) {
       ga.noalias() += v[r] * Ja.row(r).transpose();
@@ -158,6 +163,10 @@ void ProblemEvaluator::JacobianTimes(Kind kind, const Eigen::VectorXd& x,
   const JacobianRows& Ja = J_a_[kind];
   const JacobianRows& Jb = J_b_[kind];
   for (const Item& it : items_[kind]) {
+    if (it.idle) {  // zero rows
+      out->segment(it.row, it.dim).setZero();
+      continue;
+    }
     const Vector7d xa = it.block_a >= 0 ? Vector7d(x.segment<7>(7 * it.block_a)) : Vector7d::Zero();
     const Vector7d xb = it.block_b >= 0 ? Vector7d(x.segment<7>(7 * it.block_b)) : Vector7d::Zero();
     for (int r = it.row; r < it.row + it.dim; ++r) {
@@ -173,6 +182,7 @@ void ProblemEvaluator::AddGaussNewton(Kind kind, const Eigen::VectorXd& row_weig
   const JacobianRows& Ja = J_a_[kind];
   const JacobianRows& Jb = J_b_[kind];
   for (const Item& it : items_[kind]) {
+    if (it.idle) continue;  // zero rows
     Matrix7d aa = Matrix7d::Zero(), ab = Matrix7d::Zero(), bb = Matrix7d::Zero();
     bool any = false;
     for (int r = it.row; r < it.row + it.dim; ++r) {
@@ -197,7 +207,7 @@ void ProblemEvaluator::AddGaussNewton(Kind kind, const Eigen::VectorXd& row_weig
 void ProblemEvaluator::AddCurvature(Kind kind, const Eigen::VectorXd& weights, BlockMatrix* H) {
   TermHessian h;
   for (const Item& it : items_[kind]) {
-    if (!it.term->has_hessian()) continue;
+    if (it.idle || !it.term->has_hessian()) continue;
     const auto w = weights.segment(it.row, it.dim);
     if (!(w.array() != 0.0).any()) continue;
     h.SetZero();

@@ -91,6 +91,9 @@ class ProblemEvaluator {
     int row = 0, dim = 0;
     int body_a = -1, body_b = -1;    // mechanism body indices
     int block_a = -1, block_b = -1;  // moving-body block indices (−1: fixed or none)
+    /// The term was idle (Term::Idle) at the last evaluation, and its row is written: a
+    /// constant value and zero Jacobian rows, which the products and sums below skip.
+    bool idle = false;
   };
   const std::vector<Problem::Entry>& List(Kind kind) const;
 

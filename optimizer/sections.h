@@ -62,6 +62,9 @@ class SectionContactTerm final : public Term {
   const nurbs::NurbsSurface& f() const { return *f_; }
   const nurbs::NurbsSurface& g() const { return *g_; }
   std::unique_ptr<TermState> MakeState() const override;
+  bool Idle(const TermState* state) const override {
+    return !static_cast<const State*>(state)->active;
+  }
   void Evaluate(const std::vector<BodyPose>& poses, TermState* state, Eigen::Ref<Eigen::VectorXd> r,
                 Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
   bool has_hessian() const override { return true; }

@@ -77,6 +77,10 @@ class Term {
                         Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                         Eigen::Ref<Eigen::MatrixXd> J_b) const = 0;
 
+  /// Whether the row is idle: constant, with a zero Jacobian and no curvature, whatever the
+  /// poses (a free contact slot). An evaluator may then skip the term once its row is written.
+  virtual bool Idle(const TermState* /*state*/) const { return false; }
+
   /// Adds Σ_i w_i ∇²r_i, the rows' second derivatives weighted by w (dim), to *h. A term that
   /// returns false from has_hessian() adds nothing: its curvature is then missing from the
   /// solver's Newton matrix (Gauss–Newton).

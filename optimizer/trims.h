@@ -163,6 +163,9 @@ class TrimmedContactTerm final : public Term {
   int body_a() const override { return body_a_; }
   int body_b() const override { return body_b_; }
   std::unique_ptr<TermState> MakeState() const override;
+  bool Idle(const TermState* state) const override {
+    return !static_cast<const State*>(state)->active;
+  }
   void Evaluate(const std::vector<BodyPose>& poses, TermState* state, Eigen::Ref<Eigen::VectorXd> r,
                 Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) const override;
   bool has_hessian() const override { return true; }

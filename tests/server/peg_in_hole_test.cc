@@ -62,10 +62,11 @@ PegRun RunPegInHole(const Scene& scene, const PegScene& names) {
       const bool a = x.surface_a == top;
       const Eigen::Vector2d uv =
           a ? Eigen::Vector2d(x.u[0], x.u[1]) : Eigen::Vector2d(x.u[2], x.u[3]);
-      // The plate's point on its material, away from the rim: a face contact, or where both
-      // faces are trimmed an edge of the peg's on the plate (the reported parameters are then
-      // where the points lie, contact::PointParameters: a rim point exactly on the loop).
-      if (trim.Nearest(uv).signed_distance > 1e-9) continue;
+      // A face contact on the material; or, where both faces are trimmed, an edge of the peg's
+      // on the plate, whose reported parameters are where its points lie
+      // (contact::PointParameters): on the plate's material, and exactly on the loop for a rim
+      // point.
+      if (x.form == 0 ? trim.Contains(uv) : trim.Nearest(uv).signed_distance > 1e-9) continue;
       // Off the material: it must be measured at the rim (the trim edge), never in the hole.
       const Eigen::Vector3d p_top = a ? Eigen::Vector3d(x.p_a[0], x.p_a[1], x.p_a[2])
                                       : Eigen::Vector3d(x.p_b[0], x.p_b[1], x.p_b[2]);
