@@ -138,14 +138,10 @@ void SurfaceContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
   // way ∂β/∂q = n·∂(f − g)/∂q at fixed parameters (the free parameters are stationary).
   const Eigen::Vector3d& n = st->ext.direction;
   r[0] = st->ext.beta;
-  // Fixed-size products, then a copy of 7 numbers each (a product straight into the dynamic
-  // Ref costs ~10x more: callgrind).
-  const Eigen::Matrix<double, 1, 7> ja =
-      n.transpose() * contact::PointJacobian(pf, st->eval.f.body.S);
-  const Eigen::Matrix<double, 1, 7> jb =
-      -n.transpose() * contact::PointJacobian(pg, st->eval.g.body.S);
-  J_a = ja;
-  J_b = jb;
+  // Fixed-size products into fixed-size blocks of the Refs (a product straight into a dynamic
+  // Ref takes Eigen's generic path: ~10x the instructions, callgrind).
+  J_a.topLeftCorner<1, 7>() = n.transpose() * contact::PointJacobian(pf, st->eval.f.body.S);
+  J_b.topLeftCorner<1, 7>() = -n.transpose() * contact::PointJacobian(pg, st->eval.g.body.S);
 }
 
 void SurfaceContactTerm::AddBoundaryHessian(const State& st, const BodyPose& pf, const BodyPose& pg,

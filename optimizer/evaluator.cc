@@ -78,8 +78,12 @@ void ProblemEvaluator::EvaluateKinds(const Eigen::VectorXd& q, int first, int la
       auto ja = J_a_[k].middleRows(it.row, it.dim);
       auto jb = J_b_[k].middleRows(it.row, it.dim);
       it.term->Evaluate(poses_, it.state, values_[k].segment(it.row, it.dim), ja, jb);
-      if (it.block_b < 0) jb.setZero();
-      if (it.block_a < 0) ja.setZero();
+      // A fixed or absent body's block is ignored; zeroed row by row (fixed-size 7-vectors: a
+      // dynamic block's setZero calls memset, ~20 % of an evaluation here).
+      for (int r = it.row; r < it.row + it.dim; ++r) {
+        if (it.block_b < 0) J_b_[k].row(r).setZero();
+        if (it.block_a < 0) J_a_[k].row(r).setZero();
+      }
     }
     if (dense_jacobians_) DenseJacobian(static_cast<Kind>(k), &dense_[k]);
   }
@@ -128,15 +132,23 @@ void ProblemEvaluator::ObjectiveGradient(const Eigen::VectorXd& q, const Eigen::
     *g -= d.weight * gd;
     if (design) *design -= d.weight * gd;
   }
+  // Row by row with fixed-size 7-vectors, as AddJacobianTransposeTimes (a dynamic d x 7
+  // transpose product takes Eigen's generic path: 5 % of the peg's tick).
+  const Eigen::VectorXd& r = values_[kObjective];
   for (const Item& it : items_[kObjective]) {
-    const auto r = values_[kObjective].segment(it.row, it.dim);
     if (it.block_a >= 0) {
-      g->segment<7>(7 * it.block_a).noalias() +=
-          it.weight * (J_a_[kObjective].middleRows(it.row, it.dim).transpose() * r);
+      Vector7d ga = Vector7d::Zero();
+      for (int k = it.row; k < it.row + it.dim; ++k) {
+        ga.noalias() += r[k] * J_a_[kObjective].row(k).transpose();
+      }
+      g->segment<7>(7 * it.block_a) += it.weight * ga;
     }
     if (it.block_b >= 0) {
-      g->segment<7>(7 * it.block_b).noalias() +=
-          it.weight * (J_b_[kObjective].middleRows(it.row, it.dim).transpose() * r);
+      Vector7d gb = Vector7d::Zero();
+      for (int k = it.row; k < it.row + it.dim; ++k) {
+        gb.noalias() += r[k] * J_b_[kObjective].row(k).transpose();
+      }
+      g->segment<7>(7 * it.block_b) += it.weight * gb;
     }
   }
 }
@@ -148,13 +160,16 @@ void ProblemEvaluator::AddJacobianTransposeTimes(Kind kind, const Eigen::VectorX
   const JacobianRows& Jb = J_b_[kind];
   for (const Item& it : items_[kind]) {
     if (it.idle) continue;  // zero rows
-    Vector7d ga = Vector7d::Zero(), gb = Vector7d::Zero();
-    for (int r = it.row; r < it.row + it.dim; ++r) {
-      ga.noalias() += v[r] * Ja.row(r).transpose();
-      gb.noalias() += v[r] * Jb.row(r).transpose();
+    if (it.block_a >= 0) {
+      Vector7d ga = Vector7d::Zero();
+      for (int r = it.row; r < it.row + it.dim; ++r) ga.noalias() += v[r] * Ja.row(r).transpose();
+      g->segment<7>(7 * it.block_a) += scale * ga;
     }
-    if (it.block_a >= 0) g->segment<7>(7 * it.block_a) += scale * ga;
-    if (it.block_b >= 0) g->segment<7>(7 * it.block_b) += scale * gb;
+    if (it.block_b >= 0) {
+      Vector7d gb = Vector7d::Zero();
+      for (int r = it.row; r < it.row + it.dim; ++r) gb.noalias() += v[r] * Jb.row(r).transpose();
+      g->segment<7>(7 * it.block_b) += scale * gb;
+    }
   }
 }
 
@@ -164,7 +179,7 @@ void ProblemEvaluator::JacobianTimes(Kind kind, const Eigen::VectorXd& x,
   const JacobianRows& Jb = J_b_[kind];
   for (const Item& it : items_[kind]) {
     if (it.idle) {  // zero rows
-      out->segment(it.row, it.dim).setZero();
+      for (int r = it.row; r < it.row + it.dim; ++r) (*out)[r] = 0.0;
       continue;
     }
     const Vector7d xa = it.block_a >= 0 ? Vector7d(x.segment<7>(7 * it.block_a)) : Vector7d::Zero();
@@ -183,6 +198,8 @@ void ProblemEvaluator::AddGaussNewton(Kind kind, const Eigen::VectorXd& row_weig
   const JacobianRows& Jb = J_b_[kind];
   for (const Item& it : items_[kind]) {
     if (it.idle) continue;  // zero rows
+    // Only the blocks of moving bodies (a contact against a fixed part has one).
+    const bool has_a = it.block_a >= 0, has_b = it.block_b >= 0;
     Matrix7d aa = Matrix7d::Zero(), ab = Matrix7d::Zero(), bb = Matrix7d::Zero();
     bool any = false;
     for (int r = it.row; r < it.row + it.dim; ++r) {
@@ -191,11 +208,9 @@ void ProblemEvaluator::AddGaussNewton(Kind kind, const Eigen::VectorXd& row_weig
       any = true;
       const Vector7d a = Ja.row(r).transpose(), b = Jb.row(r).transpose();
       const Vector7d wa = w * a;
-      aa.noalias() += wa * a.transpose();
-      if (it.block_b >= 0) {
-        bb.noalias() += (w * b) * b.transpose();
-        ab.noalias() += wa * b.transpose();
-      }
+      if (has_a) aa.noalias() += wa * a.transpose();
+      if (has_b) bb.noalias() += (w * b) * b.transpose();
+      if (has_a && has_b) ab.noalias() += wa * b.transpose();
     }
     if (!any) continue;
     if (it.block_a >= 0) H->Block(it.block_a, it.block_a) += aa;

@@ -123,8 +123,9 @@ class Line final : public Term {
                 Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> J_a,
                 Eigen::Ref<Eigen::MatrixXd>) const override {
     const BodyPose& p = PoseOf(poses, at_.body);
-    r = P_ * (p.Point(at_.point) - o_);
-    J_a = P_ * contact::PointJacobian(p, at_.point);
+    // Fixed-size blocks of the Refs: their assignments unroll (a dynamic one loops generically).
+    r.head<3>() = P_ * (p.Point(at_.point) - o_);
+    J_a.topLeftCorner<3, 7>() = P_ * contact::PointJacobian(p, at_.point);
   }
   bool has_hessian() const override { return true; }
   void AddWeightedHessian(const std::vector<BodyPose>&, TermState* /*state*/,

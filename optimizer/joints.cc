@@ -308,7 +308,7 @@ class UnitQuaternionTerm final : public Term {
                 Eigen::Ref<Eigen::MatrixXd>) const override {
     const Eigen::Vector4d Q = PoseOf(poses, body_).q.tail<4>();
     r[0] = Q.squaredNorm() - 1.0;
-    J_a.setZero();
+    J_a.topLeftCorner<1, 3>().setZero();  // fixed-size blocks: no memset
     J_a.block<1, 4>(0, 3) = 2.0 * Q.transpose();
   }
   bool has_hessian() const override { return true; }
