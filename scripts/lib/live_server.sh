@@ -17,6 +17,7 @@ in_private_netns() {
 start_tangentd() {
   local out=$1
   shift
+  : > "$out"  # exists before the first grep below (the background redirect may come later)
   "$build/server/tangentd" "$@" > "$out" 2>&1 &
   server_pid=$!
   for _ in $(seq 600); do
