@@ -25,9 +25,9 @@ using Matrix14d = Eigen::Matrix<double, 14, 14>;
 /// determinant is then |a'|²|b'|² − (a'·b')² = |a' × b'|², zero only for parallel edges.
 struct CurveCurveEval {
   PlacedCurvePoint a, b;
-  Eigen::Vector3d d;  ///< a − b, world
-  Eigen::Vector2d grad;
-  Eigen::Matrix2d hess;
+  Eigen::Vector3d d = Eigen::Vector3d::Zero();  ///< a − b, world
+  Eigen::Vector2d grad = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d hess = Eigen::Matrix2d::Zero();
 };
 void EvaluateCurveCurve(const BodyCurve& a, const BodyPose& pose_a, const BodyCurve& b,
                         const BodyPose& pose_b, const Eigen::Vector2d& x, int* span_a,

@@ -84,8 +84,10 @@ class BodyCurve {
 
 /// A curve point on a body, body and world.
 struct PlacedCurvePoint {
-  nurbs::CurvePoint<3> body;
-  nurbs::CurvePoint<3> world;
+  nurbs::CurvePoint<3> body{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                            Eigen::Vector3d::Zero()};
+  nurbs::CurvePoint<3> world{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                             Eigen::Vector3d::Zero()};
 };
 
 void EvaluatePlaced(const BodyCurve& curve, const BodyPose& pose, double tau, int* span_hint,

@@ -179,13 +179,12 @@ bool WalkOn(const TrimEdges& edges, int loop, int* piece, int* from, double* x) 
 }  // namespace
 
 void SolveEdgeEdge(const TrimEdges& edges_f, const BodyPose& pose_f, const TrimEdges& edges_g,
-                   const BodyPose& pose_g, const Eigen::Vector3d& side, EdgeEdgeFollow* e,
-                   CurveCurveEval* at) {
+                   const BodyPose& pose_g, const Eigen::Vector3d& side, EdgeEdgeFollow* e) {
   const int n = static_cast<int>(edges_f.loops()[static_cast<size_t>(e->loop_f)].size() +
                                  edges_g.loops()[static_cast<size_t>(e->loop_g)].size());
   int from_f = -1, from_g = -1;
   bool joint_f = false, joint_g = false;
-  CurveCurveEval ev;
+  CurveCurveEval& ev = e->eval;
   for (int walk = 0; walk <= n; ++walk) {
     e->ext = SolveCurveCurve(edges_f.Curve(e->loop_f, e->piece_f), pose_f,
                              edges_g.Curve(e->loop_g, e->piece_g), pose_g, e->x, {}, &ev);
@@ -214,7 +213,6 @@ void SolveEdgeEdge(const TrimEdges& edges_f, const BodyPose& pose_f, const TrimE
     nu = len > 0.0 ? Eigen::Vector3d(ev.d / len) : side.normalized();
   }
   e->nu = nu.dot(side) < 0.0 ? Eigen::Vector3d(-nu) : nu;
-  if (at) *at = ev;
 }
 
 namespace {
@@ -232,13 +230,17 @@ bool MaterialAt(const TrimEdges& edges, const Eigen::Vector2d& uv, MaterialMemo*
   return material;
 }
 
+// The face's parameters at τ on one of its edge pieces (the piece's domain point).
+Eigen::Vector2d PieceUv(const TrimEdges& edges, int loop, int piece, double tau) {
+  return edges.loops()[static_cast<size_t>(loop)][static_cast<size_t>(piece)].c.Evaluate(tau, 0).C;
+}
+
 // The in-surface direction into the material at τ on an edge piece, world: m = n × E'/|E'|,
 // n = S_u × S_v (the loops keep the material on their left in the domain), E' the edge's world
 // tangent there.
 Eigen::Vector3d IntoMaterial(const TrimEdges& edges, int loop, int piece, double tau,
                              const BodyPose& pose, const Eigen::Vector3d& tangent) {
-  const TrimEdges::Piece& p = edges.loops()[static_cast<size_t>(loop)][static_cast<size_t>(piece)];
-  const Eigen::Vector2d uv = p.c.Evaluate(tau, 0).C;
+  const Eigen::Vector2d uv = PieceUv(edges, loop, piece, tau);
   const nurbs::SurfacePoint sp = edges.surface().Evaluate(uv[0], uv[1], 1);
   const Eigen::Vector3d n = pose.R_WB * sp.S_u.cross(sp.S_v);
   return n.cross(tangent).normalized();
@@ -256,11 +258,6 @@ TrimEdges::Edge EdgeAt(const TrimEdges& edges, int loop, int piece, double tau,
   return e;
 }
 
-// The other face's parameters at τ on an edge piece (its domain curve's point).
-Eigen::Vector2d PieceUv(const TrimEdges& edges, int loop, int piece, double tau) {
-  return edges.loops()[static_cast<size_t>(loop)][static_cast<size_t>(piece)].c.Evaluate(tau, 0).C;
-}
-
 // The measure of an edge of f against g's face (`of_g`: an edge of g against f's face, its
 // points swapped back into (f, g) order and β's direction with them).
 TrimmedMeasure EdgeMeasure(const TrimEdges::Edge& e, bool of_g) {
@@ -272,6 +269,19 @@ TrimmedMeasure EdgeMeasure(const TrimEdges::Edge& e, bool of_g) {
   m.p_f = of_g ? e.ext.p_f : e.ext.p_g;  // the solver's curve is the edge, its surface the face
   m.p_g = of_g ? e.ext.p_g : e.ext.p_f;
   m.status = e.ext.status;
+  return m;
+}
+
+// The measure of two edges' contact.
+TrimmedMeasure EdgeEdgeMeasure(const EdgeEdgeFollow& ee) {
+  TrimmedMeasure m;
+  m.on_edge = true;
+  m.form = TrimmedForm::kEdgeEdge;
+  m.edge_edge = ee;
+  m.p_f = ee.ext.p_a;
+  m.p_g = ee.ext.p_b;
+  m.beta = (m.p_f - m.p_g).dot(ee.nu);
+  m.status = ee.ext.status;
   return m;
 }
 
@@ -317,12 +327,11 @@ TrimmedMeasure MeasureTrimmedPair(const TrimEdges& edges_f, const BodyPose& pose
   nurbs::TrimmedDomain::Closest near;
   if (was == TrimmedForm::kEdgeEdge) {
     ee = from->edge_edge;
-    CurveCurveEval at;
-    SolveEdgeEdge(edges_f, pose_f, *edges_g, pose_g, ee.nu, &ee, &at);
-    const double hold_g =
-        -ee.nu.dot(IntoMaterial(*edges_g, ee.loop_g, ee.piece_g, ee.x[1], pose_g, at.b.world.C1));
-    const double hold_f =
-        ee.nu.dot(IntoMaterial(edges_f, ee.loop_f, ee.piece_f, ee.x[0], pose_f, at.a.world.C1));
+    SolveEdgeEdge(edges_f, pose_f, *edges_g, pose_g, ee.nu, &ee);
+    const double hold_g = -ee.nu.dot(
+        IntoMaterial(*edges_g, ee.loop_g, ee.piece_g, ee.x[1], pose_g, ee.eval.b.world.C1));
+    const double hold_f = ee.nu.dot(
+        IntoMaterial(edges_f, ee.loop_f, ee.piece_f, ee.x[0], pose_f, ee.eval.a.world.C1));
     if (hold_g < 0.0 && hold_g <= hold_f) {  // g's material offers a nearer point: f's edge on g
       TrimEdges::Edge e = EdgeAt(edges_f, ee.loop_f, ee.piece_f, ee.x[0],
                                  PieceUv(*edges_g, ee.loop_g, ee.piece_g, ee.x[1]));
@@ -387,15 +396,7 @@ TrimmedMeasure MeasureTrimmedPair(const TrimEdges& edges_f, const BodyPose& pose
     }
     SolveEdgeEdge(edges_f, pose_f, *edges_g, pose_g, side, &ee);
   }
-  TrimmedMeasure m;
-  m.on_edge = true;
-  m.form = TrimmedForm::kEdgeEdge;
-  m.edge_edge = ee;
-  m.p_f = ee.ext.p_a;
-  m.p_g = ee.ext.p_b;
-  m.beta = (m.p_f - m.p_g).dot(ee.nu);
-  m.status = ee.ext.status;
-  return m;
+  return EdgeEdgeMeasure(ee);
 }
 
 Eigen::Vector4d PointParameters(const TrimEdges& edges_f, const TrimEdges& edges_g,
@@ -444,14 +445,7 @@ bool MeasureTrimmedPairAt(const TrimEdges& edges_f, const BodyPose& pose_f,
     ee.piece_g = edges_g.PieceOf(near_g);
     ee.x << near_f.t, near_g.t;
     SolveEdgeEdge(edges_f, pose_f, edges_g, pose_g, side, &ee);
-    *m = TrimmedMeasure();
-    m->on_edge = true;
-    m->form = TrimmedForm::kEdgeEdge;
-    m->edge_edge = ee;
-    m->p_f = ee.ext.p_a;
-    m->p_g = ee.ext.p_b;
-    m->beta = (m->p_f - m->p_g).dot(ee.nu);
-    m->status = ee.ext.status;
+    *m = EdgeEdgeMeasure(ee);
     return true;
   }
   if (on_f) {

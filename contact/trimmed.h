@@ -69,10 +69,7 @@ class TrimEdges {
     return BodyCurve(f_, &p.c, p.periodic);
   }
   /// The piece *e is on as a curve on f's body.
-  BodyCurve Curve(const Edge& e) const {
-    const Piece& p = pieces_[static_cast<size_t>(e.loop)][static_cast<size_t>(e.piece)];
-    return BodyCurve(f_, &p.c, p.periodic);
-  }
+  BodyCurve Curve(const Edge& e) const { return Curve(e.loop, e.piece); }
 
  private:
   const nurbs::NurbsSurface* f_;
@@ -80,11 +77,6 @@ class TrimEdges {
   std::vector<std::vector<Piece>> pieces_;
 };
 
-/// The distance between trimmed f and g on f's material, for a face extremum `face` of the pair
-/// (f, g) (its u: (u, v) on f, (s, t) on g): on the material, the face's; off it (or held on
-/// f's untrimmed border off the material), the nearest edge's against g. β > 0 apart. The edge
-/// is followed from `from` (an earlier measure's edge) when that is on the loop nearest the face
-/// point, else started there (TrimEdges::StartNear). Allocation free.
 /// An edge–edge contact followed (docs/trimming.md, "Edge against edge"): a piece of f's loops
 /// and one of g's, (τ_f, τ_g), and ν, the direction β is measured along (the common normal
 /// σ(a' × b')/|a' × b'| from g's edge towards f's; ±d/|d| where the extremum is held at a joint
@@ -94,16 +86,20 @@ struct EdgeEdgeFollow {
   Eigen::Vector2d x = Eigen::Vector2d::Zero();
   Eigen::Vector3d nu = Eigen::Vector3d::Zero();
   CurveCurveExtremum ext;
+  CurveCurveEval eval;         ///< the two edges evaluated at the extremum
   bool common_normal = false;  ///< ν is the common normal (both parameters free, not parallel)
 };
 /// Solves *e from its pieces and x, walking along either loop while the extremum stops at a
 /// piece's end (at most once round each), and measures it: ν keeps the side of `side` (the last
-/// ν, or the form's it switched from). `at` (may be null): the evaluation at the extremum.
-/// Allocation free.
+/// ν, or the form's it switched from). Allocation free.
 void SolveEdgeEdge(const TrimEdges& edges_f, const BodyPose& pose_f, const TrimEdges& edges_g,
-                   const BodyPose& pose_g, const Eigen::Vector3d& side, EdgeEdgeFollow* e,
-                   CurveCurveEval* at = nullptr);
+                   const BodyPose& pose_g, const Eigen::Vector3d& side, EdgeEdgeFollow* e);
 
+/// The distance between trimmed f and g on f's material, for a face extremum `face` of the pair
+/// (f, g) (its u: (u, v) on f, (s, t) on g): on the material, the face's; off it (or held on
+/// f's untrimmed border off the material), the nearest edge's against g. β > 0 apart. The edge
+/// is followed from `from` (an earlier measure's edge) when that is on the loop nearest the face
+/// point, else started there (TrimEdges::StartNear). Allocation free.
 struct TrimmedMeasure {
   bool on_edge = false;
   TrimmedForm form = TrimmedForm::kFace;

@@ -126,15 +126,11 @@ void BodyContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, Ter
     st->inner_term().AddWeightedHessian(poses, &st->inner(), w, h);
     return;
   }
-  // The inner term's blocks are over (body b, body a): [[bb, baᵀ], [ba, aa]] in this order.
+  // The inner term's blocks are over (body b, body a).
   TermHessian inner;
   inner.SetZero();
   st->inner_term().AddWeightedHessian(poses, &st->inner(), w, &inner);
-  h->aa += inner.bb;
-  h->bb += inner.aa;
-  h->ab += inner.ab.transpose();
-  h->W_a += inner.W_b;
-  h->W_b += inner.W_a;
+  h->AddSwapped(inner);
 }
 
 bool BodyContactTerm::Reach(const TermState* state, Eigen::Vector3d* p, double* reach) const {

@@ -12,13 +12,19 @@ Eigen::Vector3d CurveRowDirection(const contact::CurveSurfaceExtremum& x) {
   return x.R_WCf.col(2);
 }
 
+bool CurveCurvature(const nurbs::CurvePoint<3>& c, double* kappa) {
+  const double speed = c.C1.norm();
+  if (!(speed > 0.0)) return false;
+  *kappa = c.C1.cross(c.C2).norm() / (speed * speed * speed);
+  return true;
+}
+
 bool CurveRowReach(const contact::CurveSurfaceEval& e, const contact::CurveSurfaceExtremum& x,
                    Eigen::Vector3d* p, double* reach) {
-  if (x.status != contact::ExtremalStatus::kConverged) return false;
-  const Eigen::Vector3d& c1 = e.g.world.C1;
-  const double speed = c1.norm();
-  if (!(speed > 0.0)) return false;
-  const double kappa = c1.cross(e.g.world.C2).norm() / (speed * speed * speed);
+  double kappa = 0.0;
+  if (x.status != contact::ExtremalStatus::kConverged || !CurveCurvature(e.g.world, &kappa)) {
+    return false;
+  }
   *p = 0.5 * (x.p_f + x.p_g);
   *reach = ContactReach(x.beta, kappa);
   return std::isfinite(*reach);

@@ -31,6 +31,9 @@ void AddCurveRowHessian(const contact::CurveSurfaceEval& e, const contact::Curve
                         const Eigen::Vector3d& n, const contact::BodyPose& pa,
                         const contact::BodyPose& pb, double w, TermHessian* h);
 
+/// A curve's curvature |C' × C''| / |C'|³ at a point; false where C' = 0.
+bool CurveCurvature(const nurbs::CurvePoint<3>& c, double* kappa);
+
 /// The row's reach (Term::Reach): its gap plus a quarter of the curve's radius of curvature
 /// |C'|³ / |C' × C''| at E (the tighter of the two where a curve meets a surface across it).
 bool CurveRowReach(const contact::CurveSurfaceEval& e, const contact::CurveSurfaceExtremum& x,

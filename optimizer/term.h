@@ -46,6 +46,15 @@ struct TermHessian {
   /// Folds W_a and W_b into aa and bb (Q_a, Q_b the bodies' quaternion coordinates) and clears
   /// them.
   void Fold(const Eigen::Vector4d& Q_a, const Eigen::Vector4d& Q_b);
+  /// Adds a Hessian taken over the bodies in the other order, (b, a): its blocks
+  /// [[bb, baᵀ], [ba, aa]] swapped into this one's (a, b).
+  void AddSwapped(const TermHessian& other) {
+    aa += other.bb;
+    bb += other.aa;
+    ab += other.ab.transpose();
+    W_a += other.W_b;
+    W_b += other.W_a;
+  }
 };
 
 /// The per-solve state of a term: whatever changes while a problem is solved (a contact's

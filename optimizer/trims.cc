@@ -203,7 +203,7 @@ void TrimmedContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   st->reported = face.ext;
   if (st->on_edge) {
     nurbs::SpanHint hint_g, hint_f;
-    int span = 0, span_b = 0;
+    int span = 0;
     switch (m.form) {
       case contact::TrimmedForm::kEdgeOfF:
         contact::EvaluateCurveSurface(*g_, pb, edges_->Curve(m.edge), pa, m.edge.u, &hint_g, &span,
@@ -221,15 +221,9 @@ void TrimmedContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
         st->row_direction = internal::CurveRowDirection(m.edge.ext);
         st->reported.direction = -st->row_direction;
         break;
-      case contact::TrimmedForm::kEdgeEdge: {
-        const contact::EdgeEdgeFollow& ee = m.edge_edge;
-        contact::EvaluateCurveCurve(edges_->Curve(ee.loop_f, ee.piece_f), pa,
-                                    edges_g_->Curve(ee.loop_g, ee.piece_g), pb, ee.x, &span,
-                                    &hint_f, &span_b, &hint_g, &st->edge_edge_eval);
-        st->reported.direction = ee.nu;
-        ++st->edge_edge_evaluations;
+      case contact::TrimmedForm::kEdgeEdge:  // (evaluated by the solve: m.edge_edge.eval)
+        st->reported.direction = m.edge_edge.nu;
         break;
-      }
       case contact::TrimmedForm::kFace:
         break;
     }
@@ -275,7 +269,7 @@ void TrimmedContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
       break;
     default: {  // edge–edge: ∇β = ν·∂(a − b)/∂q at fixed parameters
       const contact::Row14 g =
-          contact::EdgeEdgeGradient(st->edge_edge_eval, pa, pb, st->measure.edge_edge.nu);
+          contact::EdgeEdgeGradient(st->measure.edge_edge.eval, pa, pb, st->measure.edge_edge.nu);
       J_a = g.head<7>();
       J_b = g.tail<7>();
     }
@@ -304,20 +298,16 @@ void TrimmedContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
       inner.SetZero();
       internal::AddCurveRowHessian(st->edge_eval, m.edge.ext, st->row_direction, pb, pa, w[0],
                                    &inner);
-      h->aa += inner.bb;
-      h->bb += inner.aa;
-      h->ab += inner.ab.transpose();
-      h->W_a += inner.W_b;
-      h->W_b += inner.W_a;
+      h->AddSwapped(inner);
       break;
     }
     default: {  // edge–edge: exact where both parameters are free (else Gauss–Newton)
       const contact::EdgeEdgeFollow& ee = m.edge_edge;
       contact::Matrix2x14 x_q;
-      if (!ee.common_normal || !contact::CurveCurveJacobian(st->edge_edge_eval, pa, pb, &x_q)) {
+      if (!ee.common_normal || !contact::CurveCurveJacobian(ee.eval, pa, pb, &x_q)) {
         return;
       }
-      internal::Split(contact::EdgeEdgeHessian(st->edge_edge_eval, pa, pb, x_q, ee.nu), w[0], h);
+      internal::Split(contact::EdgeEdgeHessian(ee.eval, pa, pb, x_q, ee.nu), w[0], h);
     }
   }
 }
@@ -331,13 +321,13 @@ bool TrimmedContactTerm::Reach(const TermState* state, Eigen::Vector3d* p, doubl
     return internal::CurveRowReach(st->edge_eval, m.edge.ext, p, reach);
   }
   // Two edges: the gap plus a quarter of the tighter edge's radius of curvature.
-  if (m.status != contact::ExtremalStatus::kConverged) return false;
-  double kappa = 0.0;
-  for (const nurbs::CurvePoint<3>* c : {&st->edge_edge_eval.a.world, &st->edge_edge_eval.b.world}) {
-    const double speed = c->C1.norm();
-    if (!(speed > 0.0)) return false;
-    kappa = std::max(kappa, c->C1.cross(c->C2).norm() / (speed * speed * speed));
+  double kappa_a = 0.0, kappa_b = 0.0;
+  if (m.status != contact::ExtremalStatus::kConverged ||
+      !internal::CurveCurvature(m.edge_edge.eval.a.world, &kappa_a) ||
+      !internal::CurveCurvature(m.edge_edge.eval.b.world, &kappa_b)) {
+    return false;
   }
+  const double kappa = std::max(kappa_a, kappa_b);
   *p = 0.5 * (m.p_f + m.p_g);
   *reach = ContactReach(m.beta, kappa);
   return std::isfinite(*reach);

@@ -105,12 +105,10 @@ class TrimmedContactTerm final : public Term {
     contact::TrimmedMeasure measure;        ///< the last measure: its form, the edge followed
     bool on_edge = false;                   ///< the last evaluation measured an edge
     int64_t switches = 0;                   ///< changes of form (face, either edge, edge–edge)
-    int64_t edge_edge_evaluations = 0;      ///< evaluations that measured two edges
     contact::MaterialMemo material, material_g;  ///< the last face points found on each material
     Vector7d q_a, q_b;
     bool valid = false;
-    contact::CurveSurfaceEval edge_eval;                      ///< an edge against a face
-    contact::CurveCurveEval edge_edge_eval;                   ///< two edges'
+    contact::CurveSurfaceEval edge_eval;  ///< an edge against a face (two edges': measure's)
     Eigen::Vector3d row_direction = Eigen::Vector3d::Zero();  ///< the curve row's own n
     /// The contact as reported: the face pair's parameters (with both faces trimmed, where its
     /// points lie: contact::PointParameters), and β, points and direction of what is measured

@@ -91,6 +91,21 @@ Eigen::Vector2d SampledClosest(const Scene& s, const BodyPose& pa, const BodyPos
                  std::min(1.0, coarse[1] + w), 200);
 }
 
+// Re-solves the edges' extremum from `x` at the poses with coordinate i (A's 0–6, then B's)
+// moved by +h (k = 0) and by −h (k = 1), handing each to use(k, extremum, evaluation, poses).
+template <typename Use>
+void ResolvedAround(const Scene& s, const Vector7d& qa, const Vector7d& qb, int i, double h,
+                    const Eigen::Vector2d& x, Use&& use) {
+  for (int k = 0; k < 2; ++k) {
+    Vector7d a = qa, b = qb;
+    (i < 7 ? a[i] : b[i - 7]) += (k == 0 ? h : -h);
+    const BodyPose pa = BodyPose::FromCoordinates(a), pb = BodyPose::FromCoordinates(b);
+    CurveCurveEval at;
+    const CurveCurveExtremum e = SolveCurveCurve(s.rim, pa, s.edge, pb, x, {}, &at);
+    use(k, e, at, pa, pb);
+  }
+}
+
 TEST(EdgeEdgeTest, TheMinimumOfTwoTrimEdgesOfCurvedFaces) {
   const Scene s;
   for (const double lift : {0.0, -0.004, 0.01}) {
@@ -164,16 +179,13 @@ TEST(EdgeEdgeTest, JacobianGradientAndHessianMatchFiniteDifferences) {
       Eigen::Vector2d x[2];
       double dist[2];
       Row14 g[2];
-      for (int k = 0; k < 2; ++k) {
-        Vector7d a = qa, b = qb;
-        (i < 7 ? a[i] : b[i - 7]) += (k == 0 ? kH : -kH);
-        const BodyPose qa_k = BodyPose::FromCoordinates(a), qb_k = BodyPose::FromCoordinates(b);
-        CurveCurveEval ek;
-        const CurveCurveExtremum r = SolveCurveCurve(s.rim, qa_k, s.edge, qb_k, e.x, {}, &ek);
-        x[k] = r.x;
-        dist[k] = r.distance;
-        g[k] = CurveCurveDistanceGradient(ek, qa_k, qb_k);
-      }
+      ResolvedAround(s, qa, qb, i, kH, e.x,
+                     [&](int k, const CurveCurveExtremum& r, const CurveCurveEval& ek,
+                         const BodyPose& pa_k, const BodyPose& pb_k) {
+                       x[k] = r.x;
+                       dist[k] = r.distance;
+                       g[k] = CurveCurveDistanceGradient(ek, pa_k, pb_k);
+                     });
       fd_x.col(i) = (x[0] - x[1]) / (2 * kH);
       fd_grad[i] = (dist[0] - dist[1]) / (2 * kH);
       fd_hess.col(i) = (g[0] - g[1]).transpose() / (2 * kH);
@@ -242,17 +254,16 @@ TEST(EdgeEdgeTest, TheSignedRowIsSmoothThroughTouching) {
     for (int i = 0; i < 14; ++i) {
       double b[2];
       Row14 g[2];
-      for (int k = 0; k < 2; ++k) {
-        Vector7d a = qa, bq = qb;
-        (i < 7 ? a[i] : bq[i - 7]) += (k == 0 ? h : -h);
-        const BodyPose qa_k = BodyPose::FromCoordinates(a), qb_k = BodyPose::FromCoordinates(bq);
-        CurveCurveEval ek;
-        SolveCurveCurve(s.rim, qa_k, s.edge, qb_k, e.x, {}, &ek);
-        Eigen::Vector3d nk;
-        ASSERT_TRUE(CommonNormal(ek, sign, &nk));
-        b[k] = ek.d.dot(nk);
-        g[k] = EdgeEdgeGradient(ek, qa_k, qb_k, nk);
-      }
+      bool regular = true;
+      ResolvedAround(s, qa, qb, i, h, e.x,
+                     [&](int k, const CurveCurveExtremum&, const CurveCurveEval& ek,
+                         const BodyPose& pa_k, const BodyPose& pb_k) {
+                       Eigen::Vector3d nk;
+                       regular = regular && CommonNormal(ek, sign, &nk);
+                       b[k] = ek.d.dot(nk);
+                       g[k] = EdgeEdgeGradient(ek, pa_k, pb_k, nk);
+                     });
+      ASSERT_TRUE(regular) << "gap " << gap << " q" << i;
       fd_grad[i] = (b[0] - b[1]) / (2 * h);
       fd_hess.col(i) = (g[0] - g[1]).transpose() / (2 * h);
     }
