@@ -70,7 +70,7 @@ bool ContactJacobianImplicit(const SurfacePairEval& e, const BodyPose& pose_f,
   const auto lu = internal::Factor<4>(e.F_u);
   double rcond = 0.0;
   if (internal::IsSingular<4>(lu, 0.0, &rcond)) return false;
-  *u_q = -lu.solve(F_q);
+  *u_q = -internal::SolveColumns<4, 14>(lu, F_q);
   return true;
 }
 
@@ -218,7 +218,7 @@ bool CurveSurfaceJacobianImplicit(const CurveSurfaceEval& e, const BodyPose& pos
   const auto lu = internal::Factor<3>(e.F_u);
   double rcond = 0.0;
   if (internal::IsSingular<3>(lu, 0.0, &rcond)) return false;
-  *u_q = -lu.solve(F_q);
+  *u_q = -internal::SolveColumns<3, 14>(lu, F_q);
   return true;
 }
 
@@ -247,7 +247,7 @@ bool CurveSurfaceJacobianClosedForm(const CurveSurfaceEval& e, const BodyPose& p
   Matrix3x14 B;
   B.topRows<2>() = vw.topRows<2>();
   B.row(2) = T.x() * vw.row(3) - T.y() * vw.row(2);
-  *u_q = lu.solve(B);
+  *u_q = internal::SolveColumns<3, 14>(lu, B);
   return true;
 }
 

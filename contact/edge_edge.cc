@@ -98,7 +98,7 @@ bool CurveCurveJacobian(const CurveCurveEval& e, const BodyPose& pose_a, const B
   double rcond = 0.0;
   const double scale = std::max(a1.squaredNorm(), b1.squaredNorm());
   if (internal::IsSingular<2>(lu, scale, &rcond)) return false;
-  *x_q = -lu.solve(grad_q);
+  *x_q = -internal::SolveColumns<2, 14>(lu, grad_q);
   return true;
 }
 

@@ -103,5 +103,12 @@ Eigen::Matrix3d ContactFrame(const PlacedSurfacePoint& p);
 Matrix37d PointJacobian(const BodyPose& pose, const Eigen::Vector3d& p_B);
 /// ∂a_W/∂q_B (3 x 7) of a body-fixed direction a_B (a partial, a normal): [0, ∂(R a_B)/∂Q].
 Matrix37d DirectionJacobian(const BodyPose& pose, const Eigen::Vector3d& a_B);
+/// n·∂a_W/∂Q (1 x 4) of a body-fixed direction or offset whose world image a_W = R a_B is
+/// already known: nᵀ DirectionJacobian's rotational columns, (a_W × n)ᵀ omega_map, without the
+/// 3 x 4 matrix (15 multiplications against 48).
+inline Eigen::RowVector4d DirectionGradient(const BodyPose& pose, const Eigen::Vector3d& a_W,
+                                            const Eigen::Vector3d& n) {
+  return a_W.cross(n).transpose() * pose.omega_map;
+}
 
 }  // namespace tangent::contact

@@ -27,10 +27,11 @@ Eigen::Vector3d UnitNormalPartial(const Eigen::Vector3d& N, const Eigen::Vector3
 }
 
 void Split(const Eigen::Matrix<double, 14, 14>& H, double w, TermHessian* h) {
-  const Matrix14 S = 0.5 * w * (H + H.transpose());
-  h->aa += S.topLeftCorner<7, 7>();
-  h->ab += S.topRightCorner<7, 7>();
-  h->bb += S.bottomRightCorner<7, 7>();
+  // The three blocks of ½w(H + Hᵀ) that are stored, without forming the fourth.
+  const double s = 0.5 * w;
+  h->aa += s * (H.topLeftCorner<7, 7>() + H.topLeftCorner<7, 7>().transpose());
+  h->ab += s * (H.topRightCorner<7, 7>() + H.bottomLeftCorner<7, 7>().transpose());
+  h->bb += s * (H.bottomRightCorner<7, 7>() + H.bottomRightCorner<7, 7>().transpose());
 }
 
 }  // namespace internal
@@ -213,27 +214,29 @@ void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
   contact::Matrix4x14 u_q;
   const bool regular = contact::ContactJacobianClosedForm(st->eval, pf, pg, &u_q);
   if (!regular) u_q.setZero();
-  // P = ∂(f − g)/∂q at fixed parameters.
+  // ∇²β = Pᵀ n_q + V_fᵀ u_q^f − V_gᵀ u_q^g (+ the rotations' curvature, W below), with
+  //   P = ∂(f − g)/∂q at fixed parameters = [I, −[r_f]× Ω_f, −I, [r_g]× Ω_g],
+  //   n_q = [0, −[n]× Ω_g] + a u_q.row(2) + b u_q.row(3)  (g's frame turning, (s, t) moving;
+  //         a, b the unit normal's partials),
+  //   V_f, V_g = n·∂P/∂u (the points' Jacobians changing with the parameters), rotational only.
+  // Written by its blocks: of the 14 x 14 products 2/3 of the terms are known zeros.
   Eigen::Matrix<double, 3, 14> P;
   P << contact::PointJacobian(pf, st->eval.f.body.S),
       -contact::PointJacobian(pg, st->eval.g.body.S);
-  // n_q: rotation of G and the change of (s, t).
-  Eigen::Matrix<double, 3, 14> n_q = Eigen::Matrix<double, 3, 14>::Zero();
-  n_q.rightCols<7>() = contact::DirectionJacobian(pg, pg.R_WB.transpose() * n);
-  n_q += UnitNormalPartial(st->eval.g.N_W, st->eval.g.N_W_u) * u_q.row(2) +
-         UnitNormalPartial(st->eval.g.N_W, st->eval.g.N_W_v) * u_q.row(3);
-  // Coefficient-based products (lazyProduct): at 14 x 3 x 14 Eigen would otherwise take its
+  Eigen::Matrix<double, 14, 2> X;  // [Pᵀa, Pᵀb] − V_gᵀ: the terms along u_q^g
+  X.col(0).noalias() = P.transpose() * UnitNormalPartial(st->eval.g.N_W, st->eval.g.N_W_u);
+  X.col(1).noalias() = P.transpose() * UnitNormalPartial(st->eval.g.N_W, st->eval.g.N_W_v);
+  X.block<4, 1>(10, 0) -= contact::DirectionGradient(pg, st->eval.g.world.S_u, n).transpose();
+  X.block<4, 1>(10, 1) -= contact::DirectionGradient(pg, st->eval.g.world.S_v, n).transpose();
+  Eigen::Matrix<double, 4, 2> V_f;  // V_fᵀ's rotational rows: the terms along u_q^f
+  V_f.col(0) = contact::DirectionGradient(pf, st->eval.f.world.S_u, n).transpose();
+  V_f.col(1) = contact::DirectionGradient(pf, st->eval.f.world.S_v, n).transpose();
+  // Coefficient-based products (lazyProduct): at these sizes Eigen would otherwise take its
   // blocked GEMM path, whose packing costs more than the product (callgrind on the servo).
-  Matrix14 H = P.transpose().lazyProduct(n_q);
-  // n·∂P/∂u u_q: the points' Jacobians change with the parameters.
-  Eigen::Matrix<double, 2, 14> V_f = Eigen::Matrix<double, 2, 14>::Zero(),
-                               V_g = Eigen::Matrix<double, 2, 14>::Zero();
-  V_f.block<1, 7>(0, 0) = n.transpose() * contact::DirectionJacobian(pf, st->eval.f.body.S_u);
-  V_f.block<1, 7>(1, 0) = n.transpose() * contact::DirectionJacobian(pf, st->eval.f.body.S_v);
-  V_g.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(pg, st->eval.g.body.S_u);
-  V_g.block<1, 7>(1, 7) = n.transpose() * contact::DirectionJacobian(pg, st->eval.g.body.S_v);
-  H.noalias() += V_f.transpose().lazyProduct(u_q.topRows<2>());
-  H.noalias() -= V_g.transpose().lazyProduct(u_q.bottomRows<2>());
+  Matrix14 H = X.lazyProduct(u_q.bottomRows<2>());
+  H.middleRows<4>(3) += V_f.lazyProduct(u_q.topRows<2>());
+  const Eigen::Matrix<double, 3, 4> n_Qg = -contact::Skew(n) * pg.omega_map;  // g's frame turning
+  H.rightCols<4>() += P.transpose().lazyProduct(n_Qg);
   Split(H, w[0], h);
   // n·∂²(f − g)/∂q² at fixed parameters: the rotations' curvature.
   h->W_a.noalias() += (w[0] * n) * st->eval.f.body.S.transpose();
