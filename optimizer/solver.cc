@@ -86,6 +86,8 @@ Solver::Solver(const Problem& problem, const SolverOptions& options)
   }
   if (H_.is_sparse()) {
     ldlt_.analyzePattern(H_.sparse());  // The structure is fixed: analysed once.
+  } else if (n_ <= kSmallDense) {
+    small_llt_.Reserve(n_);
   } else if (!options.design.enabled) {
     // Sizes the factorization's storage (later computes reuse it: the servo's solves allocate
     // nothing). Not LLT(n_) assigned: that constructor leaves its status uninitialized and the
@@ -343,6 +345,7 @@ bool Solver::Factorize() {
     ldlt_.factorize(H_.sparse());
     return ldlt_.info() == Eigen::Success && (ldlt_.vectorD().array() > 0.0).all();
   }
+  if (n_ <= kSmallDense) return small_llt_.Compute(H_.dense());
   llt_.compute(H_.dense());
   return llt_.info() == Eigen::Success;
 }
@@ -353,7 +356,11 @@ void Solver::SolveStep() {
     step_ = -step_;
   } else {
     step_ = -g_;
-    llt_.solveInPlace(step_);
+    if (n_ <= kSmallDense) {
+      small_llt_.SolveInPlace(&step_);
+    } else {
+      llt_.solveInPlace(step_);
+    }
   }
 }
 

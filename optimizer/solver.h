@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
 
+#include "optimizer/dense_cholesky.h"
 #include "optimizer/evaluator.h"
 #include "optimizer/problem.h"
 
@@ -204,6 +205,11 @@ class Solver {
   Eigen::VectorXd q_start_, lambda_e_start_, lambda_i_start_, lambda_e_best_, lambda_i_best_;
   Eigen::VectorXd weights_, gn_e_, gn_i_, gn_o_, kkt_, grad_e_, linearized_e_, linearized_i_,
       jstep_e_, jstep_i_;
+  // Dense Newton matrices up to kSmallDense: DenseCholesky (the servo's). Larger ones (design
+  // solves, 154 x 154 for the four-bar) keep Eigen's blocked LLT, whose matrix products pay
+  // off there.
+  static constexpr int kSmallDense = 64;
+  DenseCholesky small_llt_;
   Eigen::LLT<Eigen::MatrixXd, Eigen::Upper> llt_;
   // Natural ordering on the upper triangle: factorize() then reads the matrix in place (with a
   // fill-reducing ordering or the lower triangle it builds a permuted copy: 4 allocations per
