@@ -8,6 +8,9 @@
 # the change is the median over rounds of the round's difference (paired, so the machine's
 # slower drifts cancel).
 #   bash scripts/viewer_cost.sh [--rounds N] [--seconds S]      (default 5 rounds of 10 s)
+# With --bridge it measures instead what the bridge's viewer publishing costs with no viewer
+# attached (issue 35): tangentd with the viewer URL off (--view-lcm-url "") against the default
+# (on, ~30 Hz of scene, contacts and statistics), paired the same way.
 # Runs in a private network namespace (LCM multicast on loopback only). Needs a build.
 # The costs are reported, never judged here (they depend on the machine: docs/viewer.md has the
 # measured figures); what holds on any machine is checked on every run, and fails the script:
@@ -17,18 +20,19 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 # shellcheck source=lib/accounting.sh
 source scripts/lib/accounting.sh
-rounds=5 seconds=10
+rounds=5 seconds=10 bridge=
 while [ $# -gt 0 ]; do
   case "$1" in
     --rounds) rounds=$2; shift 2 ;;
     --seconds) seconds=$2; shift 2 ;;
-    *) echo "usage: $0 [--rounds N] [--seconds S]" >&2; exit 2 ;;
+    --bridge) bridge=--bridge; shift ;;
+    *) echo "usage: $0 [--rounds N] [--seconds S] [--bridge]" >&2; exit 2 ;;
   esac
 done
 build=${TANGENT_BUILD_DIR:-build}
 if [ -z "${TANGENT_IN_NETNS:-}" ]; then
   export TANGENT_IN_NETNS=1
-  exec unshare -rn bash "$0" --rounds "$rounds" --seconds "$seconds"
+  exec unshare -rn bash "$0" --rounds "$rounds" --seconds "$seconds" $bridge
 fi
 ip link set lo up
 ip route add 224.0.0.0/4 dev lo
@@ -37,7 +41,9 @@ trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$work"' EXIT
 
 run() {  # run ROUND with|without -> appends "mode latency_minus_ping p99" to $work/results
   local mode=$2 out="$work/$1-$2"
-  "$build/server/tangentd" --scene scenes/paperclips.json > "$out.server" 2>&1 &
+  local url=()
+  [ "$mode" = quiet ] && url=(--view-lcm-url "")  # the bridge publishes nothing for viewers
+  "$build/server/tangentd" --scene scenes/paperclips.json "${url[@]}" > "$out.server" 2>&1 &
   local server=$!
   for _ in $(seq 600); do
     grep -q "^tangentd: scene" "$out.server" && break
@@ -45,7 +51,7 @@ run() {  # run ROUND with|without -> appends "mode latency_minus_ping p99" to $w
     sleep 0.1
   done
   local view=
-  if [ "$mode" != without ]; then
+  if [ "$mode" = view ] || [ "$mode" = with ]; then
     local browser=--headless
     [ "$mode" = with ] || browser=
     "$build/view/tangent-view" --scene scenes/paperclips.json --port 0 $browser > "$out.view" 2>&1 &
@@ -81,24 +87,29 @@ run() {  # run ROUND with|without -> appends "mode latency_minus_ping p99" to $w
 }
 failed=0
 for r in $(seq 1 "$rounds"); do
-  if [ $((r % 2)) -eq 1 ]; then
+  if [ -n "$bridge" ]; then
+    if [ $((r % 2)) -eq 1 ]; then run "$r" quiet; run "$r" without; else run "$r" without; run "$r" quiet; fi
+  elif [ $((r % 2)) -eq 1 ]; then
     run "$r" without; run "$r" view; run "$r" with
   else
     run "$r" with; run "$r" view; run "$r" without
   fi
 done
-/usr/bin/python3 - "$work/results" <<'PY'
+/usr/bin/python3 - "$work/results" "$bridge" <<'PY'
 import statistics, sys
 runs = {}
 for line in open(sys.argv[1]):
     r, mode, lat, p99 = line.split()
     runs.setdefault(int(r), {})[mode] = (float(lat), float(p99))
-base = [v["without"] for v in runs.values()]
-print(f"without a viewer: round trip - ping p50 median {statistics.median(b[0] for b in base):.1f} us, "
+base_mode, modes = ("quiet", (("without", "viewer URL on, no viewer"),)) if sys.argv[2] else \
+    ("without", (("view", "tangent-view alone"), ("with", "tangent-view + headless browser")))
+base = [v[base_mode] for v in runs.values()]
+print(f"{'viewer URL off' if sys.argv[2] else 'without a viewer'}: round trip - ping p50 median "
+      f"{statistics.median(b[0] for b in base):.1f} us, "
       f"tick p99 median {statistics.median(b[1] for b in base):.2f} us")
-for mode, name in (("view", "tangent-view alone"), ("with", "tangent-view + headless browser")):
-    dl = [v[mode][0] - v["without"][0] for v in runs.values()]
-    dp = [100 * (v[mode][1] / v["without"][1] - 1) for v in runs.values()]
+for mode, name in modes:
+    dl = [v[mode][0] - v[base_mode][0] for v in runs.values()]
+    dp = [100 * (v[mode][1] / v[base_mode][1] - 1) for v in runs.values()]
     print(f"{name}: round trip change median {statistics.median(dl):+.1f} us "
           f"(rounds {min(dl):+.1f} .. {max(dl):+.1f}; limit 5 us), tick p99 change median "
           f"{statistics.median(dp):+.1f} % (rounds {min(dp):+.1f} .. {max(dp):+.1f}; limit 5 %)")
