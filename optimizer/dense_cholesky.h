@@ -1,5 +1,7 @@
 #pragma once
 
+#include <vector>
+
 #include <Eigen/Core>
 
 namespace tangent::optimizer {
@@ -9,12 +11,16 @@ namespace tangent::optimizer {
 /// matrices (14 x 14 for two moving bodies). Eigen's dynamic-size LLT runs a matrix–vector
 /// product per column through its general kernels; at these sizes their set-up is most of the
 /// work (8,300 instructions for 14 x 14, callgrind on the servo). Here every inner loop is a dot
-/// product or an update of two contiguous columns of U. Storage is sized by Reserve, so
+/// product or an update of two contiguous columns of U, and each column starts at its first
+/// nonzero (the envelope, which the factor keeps). Storage is sized by Reserve, so
 /// Compute and SolveInPlace never allocate.
 class DenseCholesky {
  public:
   /// Sizes the factor's storage for n x n matrices.
-  void Reserve(int n) { U_.resize(n, n); }
+  void Reserve(int n) {
+    U_.resize(n, n);
+    first_.resize(static_cast<size_t>(n));
+  }
   /// Factorizes A's upper triangle (A n x n, n as reserved). False, leaving the factor
   /// unusable, when A is not numerically positive definite: a pivot not > 0 (or NaN).
   bool Compute(const Eigen::MatrixXd& A);
@@ -25,6 +31,7 @@ class DenseCholesky {
 
  private:
   Eigen::MatrixXd U_;
+  std::vector<Eigen::Index> first_;  ///< per column, its first nonzero row (the envelope)
 };
 
 }  // namespace tangent::optimizer
