@@ -105,8 +105,10 @@ struct Rows {
   void Coincide(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b) {
     Matrix37 ja, jb;
     r.segment<3>(row) = Point(poses, a, &ja) - Point(poses, b, &jb);
-    Ja.middleRows<3>(row) = ja;
-    Jb.middleRows<3>(row) = -jb;
+    // (Fixed-size blocks of the Refs throughout: a product assigned to a dynamic Ref row takes
+    // Eigen's generic path, ~2,000 instructions for a 1 x 7 row; callgrind, issue 35.)
+    Ja.block<3, 7>(row, 0) = ja;
+    Jb.block<3, 7>(row, 0) = -jb;
     row += 3;
   }
   // (R_a u)·(R_b v) (1 row).
@@ -115,8 +117,8 @@ struct Rows {
     Matrix37 ju, jv;
     const Eigen::Vector3d U = Direction(poses, ba, u, &ju), V = Direction(poses, bb, v, &jv);
     r[row] = U.dot(V);
-    Ja.row(row) = V.transpose() * ju;
-    Jb.row(row) = U.transpose() * jv;
+    Ja.block<1, 7>(row, 0).noalias() = V.transpose() * ju;
+    Jb.block<1, 7>(row, 0).noalias() = U.transpose() * jv;
     ++row;
   }
   // a's axis against b's two perpendiculars (2 rows), same sense only (SameSenseMap).
@@ -127,8 +129,9 @@ struct Rows {
     Dot(poses, a.body, a.axis, b.body, b2);
     const SameSenseMap m(r.segment<2>(r0), AxisCosine(poses, a, b));
     r.segment<2>(r0) = m.value;
-    Ja.middleRows<2>(r0) = m.T * Ja.middleRows<2>(r0);
-    Jb.middleRows<2>(r0) = m.T * Jb.middleRows<2>(r0);
+    const Eigen::Matrix<double, 2, 7> ja = Ja.block<2, 7>(r0, 0), jb = Jb.block<2, 7>(r0, 0);
+    Ja.block<2, 7>(r0, 0).noalias() = m.T * ja;
+    Jb.block<2, 7>(r0, 0).noalias() = m.T * jb;
   }
   // No turn about the axis (1 row): s = (R_a ref_a)·(R_b (axis_b × ref_b)) = sin φ, same sense
   // only: for cos φ = ref_a·ref_b < 0 the row is 2 sgn(s) − s (a half turn is not a solution).
@@ -137,8 +140,8 @@ struct Rows {
     Dot(poses, a.body, a.reference, b.body, b.axis.cross(b.reference));
     if (ReferenceCosine(poses, a, b) >= 0.0) return;
     r[r0] = (r[r0] >= 0.0 ? 2.0 : -2.0) - r[r0];
-    Ja.row(r0) *= -1.0;
-    Jb.row(r0) *= -1.0;
+    Ja.block<1, 7>(r0, 0) *= -1.0;
+    Jb.block<1, 7>(r0, 0) *= -1.0;
   }
   // (P_b − P_a)·(R_a e) (1 row): b's point in a's plane through P_a normal to e.
   void Offset(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b,
@@ -147,8 +150,8 @@ struct Rows {
     const Eigen::Vector3d d = Point(poses, b, &jpb) - Point(poses, a, &jpa);
     const Eigen::Vector3d E = Direction(poses, a.body, e, &je);
     r[row] = d.dot(E);
-    Ja.row(row) = -E.transpose() * jpa + d.transpose() * je;
-    Jb.row(row) = E.transpose() * jpb;
+    Ja.block<1, 7>(row, 0).noalias() = -E.transpose() * jpa + d.transpose() * je;
+    Jb.block<1, 7>(row, 0).noalias() = E.transpose() * jpb;
     ++row;
   }
 };
