@@ -5,6 +5,7 @@
 
 #include <Eigen/LU>
 
+#include "contact/box_newton.h"
 #include "contact/contact_jacobian.h"
 #include "contact/relative_curvature.h"
 #include "contact/rigid.h"
@@ -33,6 +34,71 @@ void Split(const Eigen::Matrix<double, 14, 14>& H, double w, TermHessian* h) {
   h->ab += s * (H.topRightCorner<7, 7>() + H.bottomLeftCorner<7, 7>().transpose());
   h->bb += s * (H.bottomRightCorner<7, 7>() + H.bottomRightCorner<7, 7>().transpose());
 }
+
+template <int Ka>
+void AddPartialsHessian(const contact::BodyPose& pa, const Eigen::Matrix<double, 3, Ka>& partials_a,
+                        const Eigen::Matrix<double, Ka, 14>& x_a, const contact::BodyPose& pb,
+                        const Eigen::Matrix<double, 3, 2>& partials_b,
+                        const Eigen::Matrix<double, 2, 14>& x_b, const Eigen::Vector3d& n,
+                        Eigen::Matrix<double, 14, 14>* H) {
+  Eigen::Matrix<double, 4, Ka> V_a;  // V_aᵀ's rotational rows
+  for (int k = 0; k < Ka; ++k) {
+    V_a.col(k) = contact::DirectionGradient(pa, partials_a.col(k), n).transpose();
+  }
+  Eigen::Matrix<double, 4, 2> V_b;
+  for (int k = 0; k < 2; ++k) {
+    V_b.col(k) = contact::DirectionGradient(pb, partials_b.col(k), n).transpose();
+  }
+  // Coefficient-based products (lazyProduct): at these sizes Eigen would otherwise take its
+  // blocked GEMM path, whose packing costs more than the product (callgrind on the servo).
+  H->middleRows<4>(3) += V_a.lazyProduct(x_a);
+  H->middleRows<4>(10) -= V_b.lazyProduct(x_b);
+}
+
+template <int Ka>
+Eigen::Matrix<double, 14, 14> NormalRowHessian(
+    const Eigen::Matrix<double, 3, 14>& P, const contact::BodyPose& pa,
+    const Eigen::Matrix<double, 3, Ka>& partials_a, const Eigen::Matrix<double, Ka, 14>& x_a,
+    const contact::BodyPose& pb, const contact::PlacedSurfacePoint& b,
+    const Eigen::Matrix<double, 2, 14>& x_b, const Eigen::Vector3d& n) {
+  // Along b's (s, t): Pᵀ n_s − V_bᵀ's rows and Pᵀ n_t − V_bᵀ's, one product for both.
+  Eigen::Matrix<double, 14, 2> X;
+  X.col(0).noalias() = P.transpose() * UnitNormalPartial(b.N_W, b.N_W_u);
+  X.col(1).noalias() = P.transpose() * UnitNormalPartial(b.N_W, b.N_W_v);
+  X.block<4, 1>(10, 0) -= contact::DirectionGradient(pb, b.world.S_u, n).transpose();
+  X.block<4, 1>(10, 1) -= contact::DirectionGradient(pb, b.world.S_v, n).transpose();
+  Eigen::Matrix<double, 4, Ka> V_a;  // V_aᵀ's rotational rows: along a's parameters
+  for (int k = 0; k < Ka; ++k) {
+    V_a.col(k) = contact::DirectionGradient(pa, partials_a.col(k), n).transpose();
+  }
+  // Coefficient-based products (lazyProduct), as in AddPartialsHessian.
+  Matrix14 H = X.lazyProduct(x_b);
+  H.middleRows<4>(3) += V_a.lazyProduct(x_a);
+  const Eigen::Matrix<double, 3, 4> n_Qb = -contact::Skew(n) * pb.omega_map;  // b's frame turning
+  H.rightCols<4>() += P.transpose().lazyProduct(n_Qb);
+  return H;
+}
+
+template void AddPartialsHessian<1>(const contact::BodyPose&, const Eigen::Matrix<double, 3, 1>&,
+                                    const Eigen::Matrix<double, 1, 14>&, const contact::BodyPose&,
+                                    const Eigen::Matrix<double, 3, 2>&,
+                                    const Eigen::Matrix<double, 2, 14>&, const Eigen::Vector3d&,
+                                    Matrix14*);
+template void AddPartialsHessian<2>(const contact::BodyPose&, const Eigen::Matrix<double, 3, 2>&,
+                                    const Eigen::Matrix<double, 2, 14>&, const contact::BodyPose&,
+                                    const Eigen::Matrix<double, 3, 2>&,
+                                    const Eigen::Matrix<double, 2, 14>&, const Eigen::Vector3d&,
+                                    Matrix14*);
+template Matrix14 NormalRowHessian<1>(const Eigen::Matrix<double, 3, 14>&, const contact::BodyPose&,
+                                      const Eigen::Matrix<double, 3, 1>&,
+                                      const Eigen::Matrix<double, 1, 14>&, const contact::BodyPose&,
+                                      const contact::PlacedSurfacePoint&,
+                                      const Eigen::Matrix<double, 2, 14>&, const Eigen::Vector3d&);
+template Matrix14 NormalRowHessian<2>(const Eigen::Matrix<double, 3, 14>&, const contact::BodyPose&,
+                                      const Eigen::Matrix<double, 3, 2>&,
+                                      const Eigen::Matrix<double, 2, 14>&, const contact::BodyPose&,
+                                      const contact::PlacedSurfacePoint&,
+                                      const Eigen::Matrix<double, 2, 14>&, const Eigen::Vector3d&);
 
 }  // namespace internal
 
@@ -176,21 +242,19 @@ void SurfaceContactTerm::AddBoundaryHessian(const State& st, const BodyPose& pf,
   }
   contact::Matrix4x14 u_q = contact::Matrix4x14::Zero();
   const Eigen::FullPivLU<Eigen::Matrix4d> lu(H_ff);
-  if (lu.isInvertible()) u_q = -lu.solve(G);
+  if (lu.isInvertible()) u_q = -contact::internal::SolveColumns<4, 14>(lu, G);
   Eigen::Matrix<double, 3, 4> J_u;
   J_u << a.S_u, a.S_v, -b.S_u, -b.S_v;
   const double beta =
       std::abs(st.ext.beta) > 1e-12 ? st.ext.beta : (st.ext.beta < 0.0 ? -1e-12 : 1e-12);
   const Eigen::Matrix<double, 3, 14> n_q =
       (Eigen::Matrix3d::Identity() - n * n.transpose()) * (P + J_u * u_q) / beta;
-  Matrix14 H = P.transpose().lazyProduct(n_q);  // (see AddWeightedHessian)
-  Eigen::Matrix<double, 2, 14> V_f = Eigen::Matrix<double, 2, 14>::Zero(),
-                               V_g = Eigen::Matrix<double, 2, 14>::Zero();
-  V_f.block<1, 7>(0, 0) = n.transpose() * contact::DirectionJacobian(pf, st.eval.f.body.S_u);
-  V_f.block<1, 7>(1, 0) = n.transpose() * contact::DirectionJacobian(pf, st.eval.f.body.S_v);
-  V_g.block<1, 7>(0, 7) = n.transpose() * contact::DirectionJacobian(pg, st.eval.g.body.S_u);
-  V_g.block<1, 7>(1, 7) = n.transpose() * contact::DirectionJacobian(pg, st.eval.g.body.S_v);
-  H.noalias() += V_f.transpose() * u_q.topRows<2>() - V_g.transpose() * u_q.bottomRows<2>();
+  Matrix14 H = P.transpose().lazyProduct(n_q);  // (see AddPartialsHessian)
+  Eigen::Matrix<double, 3, 2> partials_f, partials_g;
+  partials_f << a.S_u, a.S_v;
+  partials_g << b.S_u, b.S_v;
+  internal::AddPartialsHessian<2>(pf, partials_f, u_q.topRows<2>(), pg, partials_g,
+                                  u_q.bottomRows<2>(), n, &H);
   Split(H, w, h);
   h->W_a.noalias() += (w * n) * st.eval.f.body.S.transpose();
   h->W_b.noalias() -= (w * n) * st.eval.g.body.S.transpose();
@@ -214,30 +278,15 @@ void SurfaceContactTerm::AddWeightedHessian(const std::vector<BodyPose>& poses, 
   contact::Matrix4x14 u_q;
   const bool regular = contact::ContactJacobianClosedForm(st->eval, pf, pg, &u_q);
   if (!regular) u_q.setZero();
-  // ∇²β = Pᵀ n_q + V_fᵀ u_q^f − V_gᵀ u_q^g (+ the rotations' curvature, W below), with
-  //   P = ∂(f − g)/∂q at fixed parameters = [I, −[r_f]× Ω_f, −I, [r_g]× Ω_g],
-  //   n_q = [0, −[n]× Ω_g] + a u_q.row(2) + b u_q.row(3)  (g's frame turning, (s, t) moving;
-  //         a, b the unit normal's partials),
-  //   V_f, V_g = n·∂P/∂u (the points' Jacobians changing with the parameters), rotational only.
-  // Written by its blocks: of the 14 x 14 products 2/3 of the terms are known zeros.
+  // ∇²β = Pᵀ n_q + V_fᵀ u_q^f − V_gᵀ u_q^g (internal::NormalRowHessian) + the rotations'
+  // curvature (W below), with P = ∂(f − g)/∂q at fixed parameters.
   Eigen::Matrix<double, 3, 14> P;
   P << contact::PointJacobian(pf, st->eval.f.body.S),
       -contact::PointJacobian(pg, st->eval.g.body.S);
-  Eigen::Matrix<double, 14, 2> X;  // [Pᵀa, Pᵀb] − V_gᵀ: the terms along u_q^g
-  X.col(0).noalias() = P.transpose() * UnitNormalPartial(st->eval.g.N_W, st->eval.g.N_W_u);
-  X.col(1).noalias() = P.transpose() * UnitNormalPartial(st->eval.g.N_W, st->eval.g.N_W_v);
-  X.block<4, 1>(10, 0) -= contact::DirectionGradient(pg, st->eval.g.world.S_u, n).transpose();
-  X.block<4, 1>(10, 1) -= contact::DirectionGradient(pg, st->eval.g.world.S_v, n).transpose();
-  Eigen::Matrix<double, 4, 2> V_f;  // V_fᵀ's rotational rows: the terms along u_q^f
-  V_f.col(0) = contact::DirectionGradient(pf, st->eval.f.world.S_u, n).transpose();
-  V_f.col(1) = contact::DirectionGradient(pf, st->eval.f.world.S_v, n).transpose();
-  // Coefficient-based products (lazyProduct): at these sizes Eigen would otherwise take its
-  // blocked GEMM path, whose packing costs more than the product (callgrind on the servo).
-  Matrix14 H = X.lazyProduct(u_q.bottomRows<2>());
-  H.middleRows<4>(3) += V_f.lazyProduct(u_q.topRows<2>());
-  const Eigen::Matrix<double, 3, 4> n_Qg = -contact::Skew(n) * pg.omega_map;  // g's frame turning
-  H.rightCols<4>() += P.transpose().lazyProduct(n_Qg);
-  Split(H, w[0], h);
+  Eigen::Matrix<double, 3, 2> partials_f;
+  partials_f << st->eval.f.world.S_u, st->eval.f.world.S_v;
+  const Eigen::Matrix<double, 2, 14> u_f = u_q.topRows<2>(), u_g = u_q.bottomRows<2>();
+  Split(internal::NormalRowHessian<2>(P, pf, partials_f, u_f, pg, st->eval.g, u_g, n), w[0], h);
   // n·∂²(f − g)/∂q² at fixed parameters: the rotations' curvature.
   h->W_a.noalias() += (w[0] * n) * st->eval.f.body.S.transpose();
   h->W_b.noalias() -= (w[0] * n) * st->eval.g.body.S.transpose();

@@ -202,6 +202,27 @@ namespace internal {
 Eigen::Vector3d UnitNormalPartial(const Eigen::Vector3d& N, const Eigen::Vector3d& N_a);
 /// Adds w·sym(H), a Hessian over (q_a, q_b), into h's blocks (the contact terms' Hessians).
 void Split(const Eigen::Matrix<double, 14, 14>& H, double w, TermHessian* h);
+/// H += V_aᵀ x_a − V_bᵀ x_b for a contact row β = n·(p_a − p_b): the points' Jacobians changing
+/// as their parameters move (x_a: Ka x 14, x_b: 2 x 14, over (q_a, q_b)). V = n·∂P/∂(parameter)
+/// is rotational only, one row (t_W × n)ᵀΩ per world partial t_W (contact::DirectionGradient),
+/// so only H's rows 3–6 and 10–13 change.
+template <int Ka>
+void AddPartialsHessian(const contact::BodyPose& pa, const Eigen::Matrix<double, 3, Ka>& partials_a,
+                        const Eigen::Matrix<double, Ka, 14>& x_a, const contact::BodyPose& pb,
+                        const Eigen::Matrix<double, 3, 2>& partials_b,
+                        const Eigen::Matrix<double, 2, 14>& x_b, const Eigen::Vector3d& n,
+                        Eigen::Matrix<double, 14, 14>* H);
+/// ∇²β at fixed parameters' rotational curvature aside, for a row β = n·(p_a − p_b) measured along
+/// surface b's unit normal n = N/|N| at an interior extremum (a surface pair's, a curve's against
+/// a surface): Pᵀ n_q + V_aᵀ x_a − V_bᵀ x_b, with P = ∂(p_a − p_b)/∂q at fixed parameters and
+/// n_q = [0, −[n]× Ω_b] + n_s x_b.row(0) + n_t x_b.row(1) (b's frame turning, its (s, t) moving).
+/// Written by its nonzero blocks: of the 14 x 14 products 2/3 of the terms are known zeros.
+template <int Ka>
+Eigen::Matrix<double, 14, 14> NormalRowHessian(
+    const Eigen::Matrix<double, 3, 14>& P, const contact::BodyPose& pa,
+    const Eigen::Matrix<double, 3, Ka>& partials_a, const Eigen::Matrix<double, Ka, 14>& x_a,
+    const contact::BodyPose& pb, const contact::PlacedSurfacePoint& b,
+    const Eigen::Matrix<double, 2, 14>& x_b, const Eigen::Vector3d& n);
 }  // namespace internal
 
 std::shared_ptr<SurfaceContactTerm> MakeSurfaceContact(int body_f, const nurbs::NurbsSurface* f,

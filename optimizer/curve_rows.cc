@@ -33,8 +33,9 @@ bool CurveRowReach(const contact::CurveSurfaceEval& e, const contact::CurveSurfa
 void CurveRowJacobian(const contact::CurveSurfaceEval& e, const Eigen::Vector3d& n,
                       const contact::BodyPose& pa, const contact::BodyPose& pb,
                       Eigen::Ref<Eigen::MatrixXd> J_a, Eigen::Ref<Eigen::MatrixXd> J_b) {
-  J_a = n.transpose() * contact::PointJacobian(pa, e.g.body.C);
-  J_b = -n.transpose() * contact::PointJacobian(pb, e.f.body.S);
+  // (Fixed-size blocks of the Refs: a product into a dynamic Ref takes Eigen's generic path.)
+  J_a.topLeftCorner<1, 7>() = n.transpose() * contact::PointJacobian(pa, e.g.body.C);
+  J_b.topLeftCorner<1, 7>() = -n.transpose() * contact::PointJacobian(pb, e.f.body.S);
 }
 
 void AddCurveRowHessian(const contact::CurveSurfaceEval& e, const contact::CurveSurfaceExtremum& x,
@@ -45,23 +46,13 @@ void AddCurveRowHessian(const contact::CurveSurfaceEval& e, const contact::Curve
   if (!contact::CurveSurfaceJacobianImplicit(e, pb, pa, &solver_q)) solver_q.setZero();
   contact::Matrix3x14 x_q;  // over (q_a, q_b)
   x_q << solver_q.rightCols<7>(), solver_q.leftCols<7>();
-  // ∇²β = Pᵀ n_q + V_Eᵀ x_q^τ − V_Gᵀ x_q^(s,t), written by its blocks as the surface pair's
-  // (SurfaceContactTerm::AddWeightedHessian): P = [∂E/∂q_a, −∂G/∂q_b] at fixed parameters,
-  // n_q = [0, −[n]× Ω_b] + a x_q.row(0) + b x_q.row(1) (a, b the unit normal's partials), and
-  // V_E, V_G = n·∂P/∂(τ, s, t), rotational only.
+  // ∇²β = Pᵀ n_q + V_Eᵀ x_q^τ − V_Gᵀ x_q^(s,t) (NormalRowHessian: the surface pair's form
+  // with the curve's one parameter), P = [∂E/∂q_a, −∂G/∂q_b] at fixed parameters.
   Eigen::Matrix<double, 3, 14> P;
   P << contact::PointJacobian(pa, e.g.body.C), -contact::PointJacobian(pb, e.f.body.S);
-  Eigen::Matrix<double, 14, 2> X;  // [Pᵀa, Pᵀb] − V_Gᵀ: the terms along x_q^(s,t)
-  X.col(0).noalias() = P.transpose() * UnitNormalPartial(e.f.N_W, e.f.N_W_u);
-  X.col(1).noalias() = P.transpose() * UnitNormalPartial(e.f.N_W, e.f.N_W_v);
-  X.block<4, 1>(10, 0) -= contact::DirectionGradient(pb, e.f.world.S_u, n).transpose();
-  X.block<4, 1>(10, 1) -= contact::DirectionGradient(pb, e.f.world.S_v, n).transpose();
-  Eigen::Matrix<double, 14, 14> H = X.lazyProduct(x_q.topRows<2>());  // (as contacts.cc)
-  H.middleRows<4>(3) +=
-      contact::DirectionGradient(pa, e.g.world.C1, n).transpose().lazyProduct(x_q.row(2));
-  const Eigen::Matrix<double, 3, 4> n_Qb = -contact::Skew(n) * pb.omega_map;  // b's frame turning
-  H.rightCols<4>() += P.transpose().lazyProduct(n_Qb);
-  Split(H, w, h);
+  const Eigen::Matrix<double, 1, 14> x_tau = x_q.row(2);
+  const Eigen::Matrix<double, 2, 14> x_st = x_q.topRows<2>();
+  Split(NormalRowHessian<1>(P, pa, e.g.world.C1, x_tau, pb, e.f, x_st, n), w, h);
   h->W_a.noalias() += (w * n) * e.g.body.C.transpose();
   h->W_b.noalias() -= (w * n) * e.f.body.S.transpose();
 }

@@ -114,11 +114,15 @@ struct Rows {
   // (R_a u)·(R_b v) (1 row).
   void Dot(const std::vector<BodyPose>& poses, int ba, const Eigen::Vector3d& u, int bb,
            const Eigen::Vector3d& v) {
-    Matrix37 ju, jv;
-    const Eigen::Vector3d U = Direction(poses, ba, u, &ju), V = Direction(poses, bb, v, &jv);
+    const BodyPose& pa = PoseOf(poses, ba);
+    const BodyPose& pb = PoseOf(poses, bb);
+    const Eigen::Vector3d U = pa.R_WB * u, V = pb.R_WB * v;
     r[row] = U.dot(V);
-    Ja.block<1, 7>(row, 0).noalias() = V.transpose() * ju;
-    Jb.block<1, 7>(row, 0).noalias() = U.transpose() * jv;
+    // ∂(U·V)/∂q_a = Vᵀ ∂U/∂q_a: rotational only (contact::DirectionGradient), and likewise for b.
+    Ja.block<1, 3>(row, 0).setZero();
+    Ja.block<1, 4>(row, 3) = contact::DirectionGradient(pa, U, V);
+    Jb.block<1, 3>(row, 0).setZero();
+    Jb.block<1, 4>(row, 3) = contact::DirectionGradient(pb, V, U);
     ++row;
   }
   // a's axis against b's two perpendiculars (2 rows), same sense only (SameSenseMap).
