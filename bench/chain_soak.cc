@@ -113,6 +113,7 @@ int main(int argc, char** argv) {
                       ok ? "" : " (not applied)");
         }
       });
+      servo.AdoptClearances(link.clearances());
     }
     quiet = t > 10.0 && f.norm() < 0.02 ? quiet + 1 : 0;
     if (!apart && quiet > 5000) {

@@ -54,6 +54,7 @@ int main(int argc, char** argv) {
   double worst_violation = 0.0, worst_gap = 0.0;
   int events_applied = 0;
   std::deque<std::pair<int, ContactEventMsg>> pending;
+  std::deque<std::pair<int, tangent::server::ClearanceMsg>> certificates;
   const bool verbose = std::getenv("TANGENT_VERBOSE") != nullptr;
   CALLGRIND_START_INSTRUMENTATION;  // (a no-op outside valgrind)
   for (int k = 0; k < steps; ++k) {
@@ -86,6 +87,8 @@ int main(int argc, char** argv) {
     // The global pass on this snapshot; its events reach the servo `lag` device steps later
     // (the threaded server's pass runs beside the servo and lags it by up to a millisecond).
     link.Pass(snap, [&](const ContactEventMsg& m) { pending.push_back({k + lag, m}); });
+    // Its clearance certificate with them, after them (as the engine takes it).
+    certificates.push_back({k + lag, link.clearances()});
     while (!pending.empty() && pending.front().first <= k) {
       const ContactEventMsg& m = pending.front().second;
       events_applied += servo.Apply(m);
@@ -95,6 +98,10 @@ int main(int argc, char** argv) {
                     m.u[3]);
       }
       pending.pop_front();
+    }
+    while (!certificates.empty() && certificates.front().first <= k) {
+      servo.AdoptClearances(certificates.front().second);
+      certificates.pop_front();
     }
   }
   double total = 0.0;

@@ -175,6 +175,7 @@ Trace Simulate(const Scene& scene, const Hand& hand, const Setting& s, double se
       servo.FillSnapshot(&snap);
       tr.contacts.emplace_back(snap.contacts, snap.contacts + snap.num_contacts);
       link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
+      servo.AdoptClearances(link.clearances());
     }
   }
   return tr;

@@ -128,6 +128,14 @@ class GlobalContactStage {
            std::vector<ContactEvent>* events, GlobalStats* stats = nullptr);
   /// The contacts with β < activation found by the last pass (sorted by pair, then u).
   const std::vector<GlobalContact>& found() const { return found_; }
+  /// The surface pairs whose offsets crossed in the last pass, each with the smallest distance
+  /// its refinements measured on the material (+∞ when none converged to a minimum): the
+  /// clearance certificate's view of pairs nearer than their offsets (contact/clearance.h).
+  struct Viewed {
+    int a = -1, b = -1;
+    double nearest = 0.0;
+  };
+  const std::vector<Viewed>& viewed() const { return viewed_; }
   const GlobalOptions& options() const { return options_; }
 
   struct Impl;  ///< FCL objects and per-surface data (opaque)
@@ -154,6 +162,7 @@ class GlobalContactStage {
   std::unique_ptr<Impl> impl_;
   GlobalOptions options_;
   std::vector<GlobalContact> found_;
+  std::vector<Viewed> viewed_;
   std::vector<GlobalContact> split_;  ///< minima beside tracked saddles (Events' workspace)
   std::vector<char> removed_;         ///< per tracked contact, removed this pass
 };

@@ -624,6 +624,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     const double lagrangian = design ? Lagrangian(q) : 0.0;
     const double slope = design ? kkt_.dot(step_) : 0.0;
     double alpha = options_.step_reach ? ReachFraction(problem_, data(), q, step_) : 1.0;
+    if (guard_ && guard_->armed()) alpha = std::min(alpha, guard_->Fraction(q, step_));
     for (int k = 0; k < (design ? 30 : 8); ++k) {
       q_try_ = q + alpha * step_;
       Normalize(&q_try_);

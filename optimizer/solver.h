@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
 
+#include "optimizer/clearance_guard.h"
 #include "optimizer/dense_cholesky.h"
 #include "optimizer/evaluator.h"
 #include "optimizer/problem.h"
@@ -137,6 +138,9 @@ class Solver {
   /// Appends one record per iteration to *history (nullptr: none). Offline only: it evaluates
   /// the objective each iteration and allocates.
   void set_history(std::vector<IterationRecord>* history) { history_ = history; }
+  /// Shortens every step to what `guard` admits (optimizer/clearance_guard.h; nullptr: none).
+  /// The guard must outlive the solver's solves.
+  void set_clearance_guard(const ClearanceGuard* guard) { guard_ = guard; }
   /// This solver's per-solve data of the problem: goal targets, tracked contacts (the Problem
   /// is shared and never changed; several solvers of one problem may run on different threads).
   ProblemData& data() { return ev_.data(); }
@@ -193,6 +197,7 @@ class Solver {
 
   const Problem& problem_;
   SolverOptions options_;
+  const ClearanceGuard* guard_ = nullptr;
   int n_ = 0;
   ProblemEvaluator ev_;
   BlockMatrix H_;

@@ -157,6 +157,8 @@ struct Engine::ServoState {
   bool was_fresh = false;
   Snapshot snap;
   ContactEventMsg event;
+  ClearanceMsg clearance;
+  unsigned clearance_version = 0;
   int64_t period = 0, spin = 0;  ///< ns
   int64_t next = 0;              ///< the next deadline
   // The device's own rhythm (a 1 kHz stream arrives every millisecond give or take the
@@ -181,7 +183,16 @@ void Engine::ServoThread() {
     const bool early = WaitForTick(&s);
     const int64_t start = MonotonicNs();
     if (!early && start > s.next + s.period) ++s.counters.overruns;
+    // The certificate is read before the events and taken after them: every event of its pass
+    // was pushed before it was written, so the contacts it leaves out are tracked when it holds.
+    // (TryRead: a 6 kB copy the servo never waits on; a torn one is read again next tick.)
+    unsigned cv = 0;
+    if (clearances_.version() != s.clearance_version) cv = clearances_.TryRead(&s.clearance);
     ApplyEvents(&s, start);
+    if (cv != 0) {
+      s.clearance_version = cv;
+      servo_->AdoptClearances(s.clearance);
+    }
     ReadDevice(&s);
     servo_->Tick(s.have_sample ? &s.sample : nullptr, start, &s.result);
     CountTick(&s, start);
@@ -379,6 +390,7 @@ void Engine::GlobalThread() {
       link.Pass(snap, [&](const ContactEventMsg& m) {
         if (events_.Push(m)) events_pushed_.fetch_add(1);
       });
+      clearances_.Write(link.clearances());
       global_.Add(1e-3 * static_cast<double>(MonotonicNs() - t0));
       global_passes_.fetch_add(1, std::memory_order_relaxed);
     }

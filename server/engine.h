@@ -187,6 +187,9 @@ class Engine {
   SpscRing<WrenchSample, 1024> wrenches_;
   SpscRing<ContactEventMsg, 256> events_;
   Seqlock<Snapshot> snapshot_;
+  /// Global stage → servo: the clearance certificate of its last pass (written after that
+  /// pass's events are pushed, so a servo that reads it before taking the events has them).
+  Seqlock<ClearanceMsg> clearances_;
   Seqlock<LoopCounters> counters_;
   WindowMax window_;
   SpscRing<JournalEntry, 256> journal_;

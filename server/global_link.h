@@ -1,11 +1,14 @@
 #pragma once
 
 // The servo ↔ global-stage link, written once: a pass of the global contact stage on a servo
-// snapshot, its events converted to the messages the servo applies. The engine's global thread,
-// the servo tests and the servo benchmark all drive the stage through it.
+// snapshot, its events converted to the messages the servo applies, and the clearance
+// certificate of the pairs it left apart (contact/clearance.h). The engine's global thread, the
+// servo tests and the servo benchmark all drive the stage through it.
 
+#include <utility>
 #include <vector>
 
+#include "contact/clearance.h"
 #include "contact/global.h"
 #include "server/messages.h"
 #include "server/servo.h"
@@ -17,23 +20,36 @@ class GlobalLink {
   /// The stage over the servo's scene (its surfaces, declared pairs and global_stage settings).
   explicit GlobalLink(const ServoLoop& servo) : GlobalLink(servo, servo.GlobalStageOptions()) {}
   GlobalLink(const ServoLoop& servo, const contact::GlobalOptions& options)
-      : stage_(servo.GlobalSurfaces(), servo.GlobalPairs(), servo.GlobalBodyPairs(), options) {}
+      : stage_(servo.GlobalSurfaces(), servo.GlobalPairs(), servo.GlobalBodyPairs(), options),
+        certifier_(servo.GlobalSurfaces(), servo.GlobalPairs(), servo.GlobalBodyPairs(),
+                   0.5 * options.activation) {}
 
-  /// One pass on `snapshot`: emit(const ContactEventMsg&) for each event, in order.
-  /// @return the number of events.
+  /// One pass on `snapshot`: emit(const ContactEventMsg&) for each event, in order; then the
+  /// certificate of the pairs apart (clearances()). @return the number of events.
   template <class Emit>
   int Pass(const Snapshot& snapshot, Emit&& emit) {
     ToGlobalInput(snapshot, &poses_, &tracked_);
     stage_.Run(poses_, tracked_, &events_);
     for (const contact::ContactEvent& e : events_) emit(ToEventMsg(e));
+    Certify(snapshot);
     return static_cast<int>(events_.size());
   }
+  /// The last pass's certificate (for ServoLoop::AdoptClearances).
+  const ClearanceMsg& clearances() const { return clearances_; }
 
  private:
+  /// The certificate at the snapshot's poses, leaving out the surface pairs in contact: those
+  /// the servo tracks and those the pass found (added).
+  void Certify(const Snapshot& snapshot);
+
   contact::GlobalContactStage stage_;
+  contact::ClearanceCertifier certifier_;
   std::vector<contact::BodyPose> poses_;
   std::vector<contact::GlobalContact> tracked_;
   std::vector<contact::ContactEvent> events_;
+  std::vector<std::pair<int, int>> in_contact_;
+  std::vector<double> clearance_;
+  ClearanceMsg clearances_;
 };
 
 }  // namespace tangent::server

@@ -47,6 +47,14 @@ class Seqlock {
       if (seq_.load(std::memory_order_relaxed) == s0) return s0;
     }
   }
+  /// One attempt, never waiting on the writer: the version read, or 0 when nothing was written
+  /// yet or a write was in progress or overlapped the copy (then *out may be torn: discard it).
+  unsigned TryRead(T* out) const {
+    const unsigned s0 = seq_.load(std::memory_order_acquire);
+    if (s0 == 0 || (s0 & 1u)) return 0;
+    CopyOut(out);
+    return seq_.load(std::memory_order_relaxed) == s0 ? s0 : 0;
+  }
   unsigned version() const { return seq_.load(std::memory_order_acquire); }
 
  private:

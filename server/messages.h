@@ -56,6 +56,19 @@ struct Snapshot {
   int64_t events_taken = 0;  ///< contact events the servo has taken (applied or dropped)
 };
 
+/// The body pairs a scene may watch at most (each pair of kMaxBodies bodies).
+inline constexpr int kMaxBodyPairs = kMaxBodies * (kMaxBodies - 1) / 2;
+
+/// Global stage → servo: a clearance certificate (contact::ClearanceCertifier) for the body pairs
+/// the stage watches, in contact::WatchedBodyPairs order, and the poses it holds at: the servo
+/// keeps every step within it (optimizer::ClearanceGuard).
+struct ClearanceMsg {
+  int64_t tick = 0;  ///< the snapshot's
+  int32_t num_bodies = 0, num_pairs = 0;
+  double q[kMaxBodies][7] = {};
+  double clearance[kMaxBodyPairs] = {};  ///< m; +∞: not certified (in contact, or touching)
+};
+
 /// Global stage → servo: one contact event (plain data, for the SPSC ring).
 struct ContactEventMsg {
   int32_t added = 1;  ///< 1 added, 0 removed

@@ -229,6 +229,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   solver_->set_options(so);
   solver_->Solve(&q_);
   p.mechanism().Poses(q_, &poses_);
+  StartClearanceGuard();
   device_origin_ = scene->device.origin_given ? scene->device.origin : GraspPoint();
   target_ = GraspPoint();
   grasp_state_->target = target_;

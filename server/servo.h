@@ -12,6 +12,7 @@
 
 #include "contact/global.h"
 #include "optimizer/body_contacts.h"
+#include "optimizer/clearance_guard.h"
 #include "optimizer/contacts.h"
 #include "optimizer/goals.h"
 #include "optimizer/problem.h"
@@ -55,6 +56,10 @@ struct ServoOptions {
   LineContactOptions line;
   /// optimizer::SolverOptions::step_reach (off by default, as line_contacts).
   bool step_reach = false;
+  /// No tunnelling (docs/stability.md): every step is kept within the global stage's last
+  /// clearance certificate (AdoptClearances), so no pair of parts certified apart can pass
+  /// through each other before the stage looks again, however late that is.
+  bool clearance_guard = true;
 };
 
 /// Test hooks: a one-shot value injected into one stage of the next tick, to show that a
@@ -101,6 +106,12 @@ class ServoLoop {
   /// contact (counted by the caller).
   bool Apply(const ContactEventMsg& e);
   void FillSnapshot(Snapshot* s) const;
+  /// Takes the global stage's clearance certificate (GlobalLink::clearances()) for the next
+  /// ticks' steps (allocation free): refused when it is not this scene's, when the guard is off,
+  /// or while the configuration has moved beyond it since its snapshot (the guard then keeps
+  /// the certificate it has, which holds the configuration). @return whether it was taken.
+  bool AdoptClearances(const ClearanceMsg& m);
+  const optimizer::ClearanceGuard& clearance_guard() const { return guard_; }
 
   /// The global stage's view of the scene (surfaces in scene order; declared surface pairs;
   /// declared body pairs).
@@ -221,6 +232,9 @@ class ServoLoop {
   optimizer::Attachment grasp_at_;
   std::vector<Slot> slots_;
   LineContacts lines_;
+  /// The step's clearance guard (servo_clearance.cc), armed from the constructor's pass.
+  optimizer::ClearanceGuard guard_;
+  void StartClearanceGuard();
   /// After a good tick: line-like contacts go to line mode (their rows retired, the sections
   /// placed), lines follow, and lines no longer line-like resume their point contact (lines_).
   void FollowLines();

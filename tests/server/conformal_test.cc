@@ -66,6 +66,7 @@ Outcome Drive(bool lines, double seconds) {
     if (sliding) out.slide_allocations += testing::AllocationCount() - before;
     servo.FillSnapshot(&snap);
     link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
+    servo.AdoptClearances(link.clearances());
     const double fz = r.wrench.force[2];
     if (t > 2.0 && t <= 3.0) {
       out.press_force += fz;
@@ -176,7 +177,10 @@ SocketOutcome DriveSocket() {
     if (t > 3.5) out.allocations += testing::AllocationCount() - before;
     servo.FillSnapshot(&snap);
     // A pass every 4 ms (the nested parts' offsets overlap everywhere: 1.5 ms a pass).
-    if (step % 4 == 0) link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
+    if (step % 4 == 0) {
+      link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
+      servo.AdoptClearances(link.clearances());
+    }
     const Eigen::Vector3d f(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
     out.max_force_step = std::max(out.max_force_step, (f - last_force).norm());
     last_force = f;

@@ -81,6 +81,7 @@ inline HandDrive DriveAlongPath(const Scene& scene, const std::string& csv, int 
     if (k % 4 == 3) {
       const auto t0 = std::chrono::steady_clock::now();
       link.Pass(snap, [&](const ContactEventMsg& m) { run.events += servo.Apply(m); });
+      servo.AdoptClearances(link.clearances());
       run.pass_seconds += seconds(t0);
     }
   }

@@ -89,6 +89,7 @@ TEST(ServoTest, PaperclipsRestExactlyAndStayWithinMicrometresWhileDragged) {
       events_applied += servo.Apply(m);
       allocations += tangent::testing::AllocationCount() - before;
     });
+    servo.AdoptClearances(link.clearances());
   }
   std::printf(
       "paperclip servo: rest violation %.1e, drag worst violation %.1e, force when lifted %.2f N, "
@@ -167,6 +168,7 @@ TEST(ServoTest, ThePaperclipChainPulledFromRestHolds) {
       if (k % 4 == 3) {
         servo.FillSnapshot(&snap);
         link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
+        servo.AdoptClearances(link.clearances());
       }
     }
     // 0.5 s into the 1 s ramp, a chain that holds pulls back with about half of k × 4 mm.
@@ -357,8 +359,10 @@ TEST(ServoTest, IdlePartsAreNotModelled) {
     }
     a.FillSnapshot(&snap);
     link_a.Pass(snap, [&](const ContactEventMsg& m) { events += a.Apply(m); });
+    a.AdoptClearances(link_a.clearances());
     b.FillSnapshot(&snap);
     link_b.Pass(snap, [&](const ContactEventMsg& m) { b.Apply(m); });
+    b.AdoptClearances(link_b.clearances());
   }
   EXPECT_EQ(differences, 0);
   EXPECT_GT(events, 0);  // the drag made and broke contacts on the way

@@ -122,6 +122,7 @@ TEST(TileOverHoleTest, TheGlobalStageFindsTheEdgesContactFromAColdStart) {
     servo.Apply(m);
     ++events;
   });
+  servo.AdoptClearances(link.clearances());
   servo.Tick(nullptr, 1'000'250'000, &r);
   servo.FillSnapshot(&snap);
   std::printf("cold start: %d held, %d event(s) in the next pass:", snap.num_contacts, events);

@@ -1,0 +1,62 @@
+// The servo's clearance guard (optimizer/clearance_guard.h; docs/stability.md "No
+// tunnelling"): its body pairs and reaches, the first certificate at the settled initial poses,
+// and the certificates the global stage sends after each pass. Split from servo.cc by concept.
+
+#include <algorithm>
+#include <utility>
+#include <vector>
+
+#include "contact/clearance.h"
+#include "server/servo.h"
+
+namespace tangent::server {
+
+void ServoLoop::StartClearanceGuard() {
+  const std::vector<contact::GlobalSurface> surfaces = GlobalSurfaces();
+  const std::vector<std::pair<int, int>> pairs = GlobalPairs();
+  const std::vector<std::pair<int, int>> body_pairs = GlobalBodyPairs();
+  const optimizer::Mechanism& m = problem_->mechanism();
+  std::vector<double> reach(static_cast<size_t>(m.num_bodies()), 0.0);
+  for (const contact::GlobalSurface& s : surfaces) {
+    if (!s.mesh) continue;
+    double& r = reach[static_cast<size_t>(s.body)];
+    r = std::max(r, contact::SurfaceReach(*s.mesh));
+  }
+  guard_.Configure(m, contact::WatchedBodyPairs(surfaces, pairs, body_pairs), std::move(reach));
+  if (!options_.clearance_guard) return;
+  solver_->set_clearance_guard(&guard_);
+  // The first certificate, at the settled poses, from a pass of the stage there (the surface
+  // pairs in contact left out).
+  contact::GlobalContactStage stage(surfaces, pairs, body_pairs, GlobalStageOptions());
+  std::vector<contact::GlobalContact> tracked;
+  for (const Slot& s : slots_) {
+    if (!s.state->active) continue;
+    contact::GlobalContact c;
+    c.a = s.surface_a;
+    c.b = s.surface_b;
+    c.u = s.U();
+    tracked.push_back(c);
+  }
+  std::vector<contact::ContactEvent> events;
+  stage.Run(poses_, tracked, &events);
+  std::vector<std::pair<int, int>> in_contact;
+  for (const auto& c : tracked) in_contact.emplace_back(c.a, c.b);
+  for (const auto& c : stage.found()) in_contact.emplace_back(c.a, c.b);
+  contact::ClearanceCertifier certifier(surfaces, pairs, body_pairs,
+                                        0.5 * GlobalStageOptions().activation);
+  std::vector<double> clearance;
+  certifier.Certify(poses_, in_contact, stage.viewed(), &clearance);
+  guard_.Adopt(
+      q_, [&](int b) { return poses_[static_cast<size_t>(b)].q; }, clearance.data());
+}
+
+bool ServoLoop::AdoptClearances(const ClearanceMsg& m) {
+  if (!options_.clearance_guard || m.num_bodies != static_cast<int32_t>(poses_.size()) ||
+      m.num_pairs != static_cast<int32_t>(guard_.pairs().size())) {
+    return false;
+  }
+  return guard_.Adopt(
+      q_, [&](int b) { return Eigen::Map<const contact::Vector7d>(m.q[b]); }, m.clearance);
+}
+
+}  // namespace tangent::server

@@ -1,0 +1,142 @@
+// The clearance guard (optimizer/clearance_guard.h): its motion bound holds every point of a
+// body within reach along a step's whole segment, is exact for a pure translation, and the
+// fraction it admits is the largest that keeps each certified pair within its share.
+
+#include "optimizer/clearance_guard.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <Eigen/Geometry>
+
+#include "testing/alloc_counter.h"
+
+namespace tangent::optimizer {
+namespace {
+
+// A fixed body and two moving ones.
+Mechanism Bodies() {
+  Mechanism m;
+  Body ground;
+  ground.fixed = true;
+  m.AddBody(ground);
+  m.AddBody(Body{});
+  m.AddBody(Body{});
+  return m;
+}
+
+Eigen::Vector4d RandomQuaternion(std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  return Eigen::Vector4d(n(rng), n(rng), n(rng), n(rng)).normalized();
+}
+
+// World position of body-frame point x at coordinates q (moving body at offset o).
+Eigen::Vector3d Place(const Eigen::VectorXd& q, int o, const Eigen::Vector3d& x) {
+  const Eigen::Vector4d Q = q.segment<4>(o + 3).normalized();
+  return q.segment<3>(o) + Eigen::Quaterniond(Q[0], Q[1], Q[2], Q[3]) * x;
+}
+
+TEST(ClearanceGuardTest, TheMotionBoundHoldsEveryPointAlongTheSegment) {
+  const Mechanism m = Bodies();
+  ClearanceGuard guard;
+  const double reach = 0.03;
+  guard.Configure(m, {{0, 1}}, {0.0, reach, reach});
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  double worst_ratio = 0.0;
+  for (int trial = 0; trial < 300; ++trial) {
+    Eigen::VectorXd q_ref(14), q(14), step(14);
+    for (int b = 0; b < 2; ++b) {
+      const int o = 7 * b;
+      q_ref.segment<3>(o) = 0.01 * Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+      q_ref.segment<4>(o + 3) = RandomQuaternion(rng);
+      // Near the reference (servo steps) or anywhere (the bound must hold regardless).
+      const double s = trial % 3 == 0 ? 1.0 : 0.05;
+      q.segment<3>(o) =
+          q_ref.segment<3>(o) + 0.01 * s * Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+      q.segment<4>(o + 3) = (q_ref.segment<4>(o + 3) + s * RandomQuaternion(rng)).normalized() *
+                            (1.0 + 0.1 * unit(rng));
+      step.segment<3>(o) = 0.01 * s * Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+      step.segment<4>(o + 3) = s * RandomQuaternion(rng);
+    }
+    const double alpha = 0.5 * (1.0 + unit(rng));
+    const double bound = guard.Motion(1, q_ref, q, step, alpha);
+    // Points of the body within reach, at 60 places along the segment.
+    double largest = 0.0;
+    for (int p = 0; p < 20; ++p) {
+      Eigen::Vector3d x(unit(rng), unit(rng), unit(rng));
+      x *= reach * std::cbrt(0.5 * (1.0 + unit(rng))) / x.norm();
+      if (p == 0) x = reach * Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized();
+      for (int i = 0; i <= 60; ++i) {
+        const Eigen::VectorXd qs = q + (alpha * i / 60.0) * step;
+        largest = std::max(largest, (Place(qs, 0, x) - Place(q_ref, 0, x)).norm());
+      }
+    }
+    EXPECT_LE(largest, bound * (1.0 + 1e-12)) << "trial " << trial;
+    worst_ratio = std::max(worst_ratio, largest / bound);
+  }
+  std::printf("largest sampled displacement / bound: %.3f\n", worst_ratio);
+  EXPECT_GT(worst_ratio, 0.5);  // not a bound so loose that it says nothing
+  // A pure translation: the bound is the displacement itself.
+  Eigen::VectorXd q_ref(14), step = Eigen::VectorXd::Zero(14);
+  q_ref << 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0;
+  step.head<3>() = Eigen::Vector3d(3e-3, -4e-3, 0);
+  EXPECT_NEAR(guard.Motion(1, q_ref, q_ref, step, 1.0), 5e-3, 1e-15);
+  EXPECT_EQ(guard.Motion(0, q_ref, q_ref, step, 1.0), 0.0);  // the fixed body
+}
+
+TEST(ClearanceGuardTest, TheFractionIsTheLargestWithinEachPairsShare) {
+  const Mechanism m = Bodies();
+  ClearanceGuard guard;
+  guard.Configure(m, {{0, 1}, {1, 2}, {0, 2}}, {0.0, 0.02, 0.01});
+  Eigen::VectorXd q = m.InitialCoordinates();
+  EXPECT_FALSE(guard.armed());
+  const double inf = std::numeric_limits<double>::infinity();
+  const double clearance[3] = {2e-3, inf, 5e-3};
+  auto at = [&](int b) { return Eigen::Matrix<double, 7, 1>(q.segment<7>(m.offset(b))); };
+  // (The guard asks only for the moving bodies' poses.)
+  ASSERT_TRUE(guard.Adopt(q, at, clearance));
+  EXPECT_TRUE(guard.armed());
+  // Body 1 moves 10 mm toward the ground: its pair (0, 1) admits 0.9 x 2 mm, a fifth of it.
+  Eigen::VectorXd step = Eigen::VectorXd::Zero(q.size());
+  step[2] = -10e-3;
+  const long before = testing::AllocationCount();
+  const double alpha = guard.Fraction(q, step);
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
+  EXPECT_NEAR(alpha, 0.18, 1e-6);
+  EXPECT_LE(guard.Motion(1, q, q, step, alpha), ClearanceGuard::kShare * 2e-3);
+  EXPECT_GT(guard.Motion(1, q, q, step, alpha + 1e-5), ClearanceGuard::kShare * 2e-3);
+  // Body 2 turns: its pair (0, 2) bounds it by its reach's chord; (1, 2) is not certified.
+  step.setZero();
+  step.segment<4>(m.offset(2) + 3) = Eigen::Vector4d(0, 0, 0, 1);  // towards a half turn
+  const double beta = guard.Fraction(q, step);
+  EXPECT_GT(beta, 0.0);
+  EXPECT_LT(beta, 1.0);
+  EXPECT_LE(guard.Motion(2, q, q, step, beta), ClearanceGuard::kShare * 5e-3 * (1 + 1e-9));
+  // A small step within every share is taken whole.
+  step.setZero();
+  step[m.offset(1)] = 1e-4;
+  EXPECT_EQ(guard.Fraction(q, step), 1.0);
+  // A certificate the configuration has already moved beyond is refused (the guard keeps its
+  // own), one that holds it is taken.
+  Eigen::VectorXd moved = q;
+  moved[m.offset(1) + 2] -= 1.9e-3;
+  const double tight[3] = {1e-3, inf, inf};
+  EXPECT_FALSE(guard.Adopt(
+      moved, [&](int b) { return at(b); }, tight));
+  EXPECT_EQ(guard.clearance()[0], 2e-3);
+  const double wide[3] = {3e-3, inf, inf};
+  EXPECT_TRUE(guard.Adopt(
+      moved, [&](int b) { return at(b); }, wide));
+  // Nothing certified: disarmed, every step whole.
+  const double none[3] = {inf, inf, inf};
+  EXPECT_TRUE(guard.Adopt(
+      q, [&](int b) { return at(b); }, none));
+  EXPECT_FALSE(guard.armed());
+}
+
+}  // namespace
+}  // namespace tangent::optimizer
