@@ -72,6 +72,7 @@ struct Run {
     if (!pass) return;
     servo->FillSnapshot(&snap);
     link->Pass(snap, [&](const ContactEventMsg& m) { servo->Apply(m); });
+    servo->AdoptClearances(link->clearances());
   }
 };
 
