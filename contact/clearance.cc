@@ -211,8 +211,11 @@ void ClearanceCertifier::Certify(const std::vector<BodyPose>& poses,
   for (size_t k = 0; k < body_pairs_.size(); ++k) {
     // A surface pair's bound less the standoff, when positive, lowers the body pair's.
     double c = inf;
+    // Certified only beyond twice the standoff (the stage's activation distance): nearer, a
+    // facing pair is the stage's next contact, and one it does not take (a face's back, a
+    // neighbouring face across a shared edge) would be held still for ever at the standoff.
     auto lower = [&](double s) {
-      if (s > m.standoff) c = std::min(c, s - m.standoff);
+      if (s > 2.0 * m.standoff) c = std::min(c, s - m.standoff);
     };
     // Pairs in the stage's view from its refinements; the others by their spheres' gaps,
     // nearest first, each by its tessellations only while its gap could still lower c.
@@ -228,10 +231,22 @@ void ClearanceCertifier::Certify(const std::vector<BodyPose>& poses,
         m.by_gap.push_back({SphereGap(key.first, key.second, poses), key.first, key.second});
         return;
       }
+      // In the stage's view the tessellations alone may hold a part off for ever (a trimmed
+      // face's uncut cells reach past its trim); its refinements' distance, measured on the
+      // material, is taken instead, but only while the tessellations say the surfaces do not
+      // meet: where they may (closer than their bounds), a refinement can converge to a pair
+      // beside the crossing, apart, and nothing is certified.
+      const double strict = SurfaceClearance(key.first, key.second, poses);
+      if (!(strict > 0.0)) return;
+      if (!(seen->nearest < inf)) {
+        lower(strict);
+        return;
+      }
       const nurbs::OffsetMesh& ma = *m.surfaces[static_cast<size_t>(key.first)].mesh;
       const nurbs::OffsetMesh& mb = *m.surfaces[static_cast<size_t>(key.second)].mesh;
-      lower(std::min(seen->nearest,
-                     ma.offset + mb.offset - 2.0 * (ma.base.error_bound + mb.base.error_bound)));
+      lower(std::max(strict, std::min(seen->nearest, ma.offset + mb.offset -
+                                                         2.0 * (ma.base.error_bound +
+                                                                mb.base.error_bound))));
     };
     if (m.whole[k]) {
       const auto& [ba, bb] = body_pairs_[k];

@@ -45,7 +45,8 @@ std::vector<std::pair<int, int>> WatchedBodyPairs(
 ///    distance between their tessellations (FCL, exact triangle distances) less both
 ///    tessellations' certified bounds (every surface point lies within its bound of its mesh);
 ///  - for a pair whose offsets crossed (in the stage's view), the smallest distance the pass's
-///    refinements measured on the material (GlobalContactStage::viewed), capped by what the
+///    refinements measured on the material (GlobalContactStage::viewed; none converged to a
+///    minimum: not certified), capped by what the
 ///    offsets say of the rest, r_a + r_b − 2(ε_a + ε_b) (r the offsets, ε the tessellations'
 ///    bounds). This is as exact as the stage's own contact detection, which rests on the same
 ///    refinements; a tessellation's bound alone would hold a trimmed face's uncut cells (which
@@ -53,10 +54,10 @@ std::vector<std::pair<int, int>> WatchedBodyPairs(
 /// Surface pairs in contact (tracked by the servo, or found by the stage's pass) are the contact
 /// rows' to hold and are left out. The value reported is the bound less a `standoff` (half the
 /// stage's activation distance): the guard then holds a pair at least that far apart, near
-/// enough that the stage's next pass takes it as a contact. Pairs nearer than the standoff are
-/// left out too (not certified apart: such a pair the stage does not take as a contact, e.g. a
-/// ball touching a face's back or its neighbour's shared edge, would otherwise be held for
-/// ever). A body pair with none left: +∞.
+/// enough that the stage's next pass takes it as a contact. Pairs not certified beyond twice the
+/// standoff are left out too: nearer, a facing pair is the stage's next contact, and a pair the
+/// stage does not take as a contact (a face's back, a ball on a face beside the wall that shares
+/// its rim) would otherwise be held still for ever. A body pair with none left: +∞.
 class ClearanceCertifier {
  public:
   ClearanceCertifier(std::vector<GlobalSurface> surfaces,

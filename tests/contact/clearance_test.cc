@@ -164,15 +164,44 @@ TEST(ClearanceTest, CertifyLeavesOutContactsAndTakesTheStagesView) {
   EXPECT_NEAR(c[0], 2e-3 - standoff, 1e-4);  // (0, 1) 2 mm apart
   // (0, 2) 0.02 mm apart: nearer than the standoff, not certified.
   EXPECT_EQ(c[1], std::numeric_limits<double>::infinity());
+  // Nor at 0.08 mm, within twice the standoff (the stage's activation distance: its contact).
+  std::vector<BodyPose> within = poses;
+  within[2] = Pose(Eigen::Vector3d(0, 10.08e-3, 0));
+  certifier.Certify(within, {}, {}, &c);
+  EXPECT_EQ(c[1], std::numeric_limits<double>::infinity());
+  within[2] = Pose(Eigen::Vector3d(0, 10.15e-3, 0));
+  certifier.Certify(within, {}, {}, &c);
+  EXPECT_LT(c[1], 1.5e-4 - standoff);
+  EXPECT_GE(c[1], 1.5e-4 - standoff - 2.0 * mesh.base.error_bound - 1e-12);
+  certifier.Certify(poses, {}, {}, &c);
   EXPECT_GT(c[2], 0.0);
   // In contact: left out.
   certifier.Certify(poses, {{0, 1}}, {}, &c);
   EXPECT_EQ(c[0], std::numeric_limits<double>::infinity());
-  // In the stage's view: its measured distance, capped by the offsets' reach.
-  certifier.Certify(poses, {}, {{0, 1, 1.5e-4}}, &c);
-  EXPECT_DOUBLE_EQ(c[0], 1.5e-4 - standoff);
-  certifier.Certify(poses, {}, {{0, 1, 1.0}}, &c);
+  // In the stage's view (balls 0 and 1 now 0.2 mm apart): the refinements' distance on the
+  // material when it is more than the tessellations say (a trimmed face's uncut cells reach past
+  // its trim), capped by the offsets' reach; the tessellations' own bound otherwise.
+  const std::vector<BodyPose> near = {Pose(Eigen::Vector3d::Zero()),
+                                      Pose(Eigen::Vector3d(10.2e-3, 0, 0)), poses[2]};
+  certifier.Certify(near, {}, {}, &c);
+  const double strict = c[0];
+  EXPECT_LE(strict, 2e-4 - standoff);
+  EXPECT_GE(strict, 2e-4 - standoff - 2.0 * mesh.base.error_bound);
+  certifier.Certify(near, {}, {{0, 1, 3e-4}}, &c);
+  EXPECT_DOUBLE_EQ(c[0], 3e-4 - standoff);
+  certifier.Certify(near, {}, {{0, 1, 1.0}}, &c);
   EXPECT_DOUBLE_EQ(c[0], 2.0 * mesh.offset - 4.0 * mesh.base.error_bound - standoff);
+  certifier.Certify(near, {}, {{0, 1, 1e-4}}, &c);
+  EXPECT_DOUBLE_EQ(c[0], strict);
+  // No refinement converged to a minimum (parallel planes' continuum): the tessellations' bound.
+  certifier.Certify(near, {}, {{0, 1, std::numeric_limits<double>::infinity()}}, &c);
+  EXPECT_DOUBLE_EQ(c[0], strict);
+  // Where the tessellations may meet, a refinement can converge beside the crossing (a tilted
+  // face through a plane, its corner apart): nothing is certified, whatever it measured.
+  const std::vector<BodyPose> crossing = {Pose(Eigen::Vector3d::Zero()),
+                                          Pose(Eigen::Vector3d(9.9e-3, 0, 0)), poses[2]};
+  certifier.Certify(crossing, {}, {{0, 1, 1e-3}}, &c);
+  EXPECT_EQ(c[0], std::numeric_limits<double>::infinity());
 }
 
 }  // namespace

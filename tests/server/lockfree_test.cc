@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <cstdio>
 #include <thread>
 
 namespace tangent::server {
@@ -42,6 +44,40 @@ TEST(LockFreeTest, SeqlockReadersNeverSeeATornValue) {
   EXPECT_GE(reads.load(), kMinReads);
   EXPECT_EQ(torn, 0);
   EXPECT_EQ(backwards, 0);
+}
+
+TEST(LockFreeTest, SeqlockTryReadNeverWaitsAndNeverReportsATornValue) {
+  // TryRead (the servo's read of the clearance certificate): one attempt; a copy it reports as
+  // read (version ≠ 0) is whole, one overlapped by a write is reported as not read.
+  Seqlock<Big> lock;
+  Big b;
+  EXPECT_EQ(lock.TryRead(&b), 0u);  // nothing written yet
+  constexpr long kMinWrites = 200000, kMinReads = 20000;
+  std::atomic<bool> done{false};
+  std::atomic<long> reads{0};
+  std::thread writer([&] {
+    Big w;
+    for (long k = 1; k <= kMinWrites || reads.load(std::memory_order_relaxed) < kMinReads; ++k) {
+      for (long& x : w.a) x = k;
+      lock.Write(w);
+    }
+    done = true;
+  });
+  long torn = 0, refused = 0;
+  while (!done) {
+    if (lock.TryRead(&b) == 0) {
+      ++refused;
+      continue;
+    }
+    reads.fetch_add(1, std::memory_order_relaxed);
+    for (long x : b.a) torn += x != b.a[0];
+  }
+  writer.join();
+  EXPECT_GE(reads.load(), kMinReads);
+  EXPECT_EQ(torn, 0);
+  std::printf("TryRead: %ld reads whole, %ld refused (a write in progress or overlapping)\n",
+              reads.load(), refused);
+  EXPECT_EQ(lock.TryRead(&b), lock.version());
 }
 
 TEST(LockFreeTest, SpscRingDeliversEveryElementInOrder) {
