@@ -191,7 +191,11 @@ void Engine::ServoThread() {
     ApplyEvents(&s, start);
     if (cv != 0) {
       s.clearance_version = cv;
-      servo_->AdoptClearances(s.clearance);
+      if (servo_->AdoptClearances(s.clearance)) {
+        ++s.counters.clearances_taken;
+      } else {
+        ++s.counters.clearances_refused;
+      }
     }
     ReadDevice(&s);
     servo_->Tick(s.have_sample ? &s.sample : nullptr, start, &s.result);

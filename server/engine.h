@@ -89,6 +89,9 @@ struct LoopCounters {
   int64_t unanswered = 0;        ///< accepted device states the servo never answered
   int64_t last_accepted = 0;     ///< accepted index of the last device state answered
   int64_t timeout_wrenches = 0;  ///< wrenches sent while the device was silent (state 2)
+  /// The global stage's clearance certificates the servo took, and those it refused (moved
+  /// beyond since their snapshot: it kept the one it had). docs/stability.md, "No tunnelling".
+  int64_t clearances_taken = 0, clearances_refused = 0;
 };
 
 /// Maxima over a window that a reader closes (lock free: the servo raises them with a CAS, the

@@ -47,5 +47,25 @@ TEST(EngineTest, ADeviceStateWakesTheSleepingServoAndIsAnsweredOnce) {
   EXPECT_GE(c.early_ticks, 3);
 }
 
+TEST(EngineTest, TheServoTakesTheGlobalStagesClearanceCertificates) {
+  // A plate held 1 mm over eight domes: every pair apart, so each pass certifies them, and the
+  // servo thread takes the certificates (through the seqlock it never waits on).
+  auto scene = LoadScene(std::string(TANGENT_SCENES_DIR) + "/contact_burst.json");
+  EngineOptions o;
+  o.servo_cpu = o.global_cpu = -1;
+  Engine engine(*scene, o);
+  engine.Start();
+  LoopCounters c;
+  const int64_t deadline = MonotonicNs() + 5'000'000'000;
+  do {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    engine.counters().Read(&c);
+  } while (c.clearances_taken < 20 && MonotonicNs() < deadline);
+  engine.Stop();
+  engine.counters().Read(&c);
+  EXPECT_GE(c.clearances_taken, 20);
+  EXPECT_EQ(c.faults, 0);
+}
+
 }  // namespace
 }  // namespace tangent::server
