@@ -244,9 +244,9 @@ void ClearanceCertifier::Certify(const std::vector<BodyPose>& poses,
       }
       const nurbs::OffsetMesh& ma = *m.surfaces[static_cast<size_t>(key.first)].mesh;
       const nurbs::OffsetMesh& mb = *m.surfaces[static_cast<size_t>(key.second)].mesh;
-      lower(std::max(strict, std::min(seen->nearest, ma.offset + mb.offset -
-                                                         2.0 * (ma.base.error_bound +
-                                                                mb.base.error_bound))));
+      lower(std::max(
+          strict, std::min(seen->nearest, ma.offset + mb.offset -
+                                              2.0 * (ma.base.error_bound + mb.base.error_bound))));
     };
     if (m.whole[k]) {
       const auto& [ba, bb] = body_pairs_[k];
