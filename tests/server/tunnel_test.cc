@@ -8,9 +8,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <thread>
 
+#include "server/engine.h"
 #include "server/global_link.h"
 #include "server/scene.h"
 #include "server/servo.h"
@@ -127,6 +130,52 @@ TEST(TunnelTest, WithoutTheGuardTheSameStepTunnels) {
   const Outcome off = Drive(false);
   EXPECT_LT(off.final_lowest + 2 * 5e-3, -1e-3);  // its top below the sheet
   EXPECT_EQ(off.contacts, 0);
+}
+
+TEST(TunnelTest, TheEnginesThreadsHoldTheBallOffTheSheetThroughAStalledStage) {
+  // The same step through the engine's two threads: once the servo holds a certificate, the
+  // global stage is stalled for 100 ms (the fault tangentd injects on SIGUSR1) and the hand
+  // jumps 30 mm below the sheet. The ball must not go through; after the stall the stage finds
+  // the contact and the sheet holds the ball.
+  const auto scene = ParseScene(kBallOverSheet, "ball_over_sheet.json");
+  EngineOptions o;
+  o.servo_cpu = o.global_cpu = -1;  // (not pinned: the test asserts nothing about timing)
+  Engine engine(*scene, o);
+  engine.Start();
+  LoopCounters c;
+  const int64_t start = MonotonicNs();
+  do {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    engine.counters().Read(&c);
+  } while (c.clearances_taken + c.clearances_refused < 2 && MonotonicNs() < start + 5'000'000'000);
+  engine.InjectGlobalStall();
+  const int ball = scene->BodyIndex("ball");
+  double lowest = 1.0, final_lowest = 1.0;
+  Snapshot snap;
+  for (int k = 1; k <= 600; ++k) {  // 1 kHz device states for 0.6 s
+    const int64_t now = MonotonicNs();
+    DeviceSample s = bench::HandSample(k, now, Eigen::Vector3d(0, 0, -30e-3));
+    s.accepted = k;
+    engine.Publish(s);
+    if (engine.snapshot().Read(&snap) != 0) {
+      final_lowest = snap.q[ball][2] - 5e-3;
+      lowest = std::min(lowest, final_lowest);
+    }
+    std::this_thread::sleep_until(std::chrono::steady_clock::now() +
+                                  std::chrono::microseconds(1000 - (MonotonicNs() - now) / 1000));
+  }
+  engine.Stop();
+  engine.counters().Read(&c);
+  std::printf(
+      "engine: lowest point %.4f mm (at the end %.4f mm), contacts %d, certificates taken %ld, "
+      "refused %ld, faults %ld, largest violation %.1e m\n",
+      1e3 * lowest, 1e3 * final_lowest, c.num_contacts, static_cast<long>(c.clearances_taken),
+      static_cast<long>(c.clearances_refused), static_cast<long>(c.faults), c.max_violation);
+  EXPECT_GE(lowest, -1e-6);              // never through the sheet
+  EXPECT_NEAR(final_lowest, 0.0, 1e-6);  // resting on it at the end
+  EXPECT_GE(c.num_contacts, 1);
+  EXPECT_EQ(c.faults, 0);
+  EXPECT_GE(c.clearances_taken, 2);
 }
 
 }  // namespace
