@@ -32,11 +32,13 @@ double ClearanceGuard::Motion(int b, const Eigen::VectorXd& q_ref, const Eigen::
   if (reach == 0.0) return translation;
   // cos and sin of half the rotation angles, from the unit quaternions' dot products (|⟨Q, Q'⟩|
   // = cos(θ/2), either sign of a quaternion being the same rotation).
-  const Eigen::Vector4d Q_ref = q_ref.segment<4>(o + 3).normalized();
-  const Eigen::Vector4d Q0 = q.segment<4>(o + 3).normalized();
-  const Eigen::Vector4d Q1 = (q.segment<4>(o + 3) + alpha * step.segment<4>(o + 3)).normalized();
-  const double ca = std::min(1.0, std::abs(Q_ref.dot(Q0)));
-  const double cb = std::min(1.0, std::abs(Q0.dot(Q1)));
+  // (From the raw coordinates: |⟨Q, Q'⟩| / (|Q| |Q'|), one square root per pair.)
+  const auto Q_ref = q_ref.segment<4>(o + 3);
+  const auto Q0 = q.segment<4>(o + 3);
+  const Eigen::Vector4d Q1 = Q0 + alpha * step.segment<4>(o + 3);
+  const double n0 = Q0.squaredNorm();
+  const double ca = std::min(1.0, std::abs(Q_ref.dot(Q0)) / std::sqrt(Q_ref.squaredNorm() * n0));
+  const double cb = std::min(1.0, std::abs(Q0.dot(Q1)) / std::sqrt(n0 * Q1.squaredNorm()));
   const double sa = std::sqrt(1.0 - ca * ca), sb = std::sqrt(1.0 - cb * cb);
   // sin((a + b)/2) while (a + b)/2 < π/2; beyond, the chord's largest value 2.
   const double chord = ca * cb - sa * sb <= 0.0 ? 2.0 : 2.0 * (sa * cb + ca * sb);
