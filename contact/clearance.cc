@@ -202,6 +202,18 @@ double ClearanceCertifier::SurfaceClearance(int a, int b, const std::vector<Body
 }
 
 void ClearanceCertifier::Certify(const std::vector<BodyPose>& poses,
+                                 const std::vector<GlobalContact>& tracked,
+                                 const GlobalContactStage& stage, std::vector<double>* clearance) {
+  in_contact_.clear();
+  for (const std::vector<GlobalContact>* contacts : {&tracked, &stage.found()}) {
+    for (const GlobalContact& c : *contacts) {
+      in_contact_.emplace_back(std::min(c.a, c.b), std::max(c.a, c.b));
+    }
+  }
+  Certify(poses, in_contact_, stage.viewed(), clearance);
+}
+
+void ClearanceCertifier::Certify(const std::vector<BodyPose>& poses,
                                  const std::vector<std::pair<int, int>>& in_contact,
                                  const std::vector<GlobalContactStage::Viewed>& viewed,
                                  std::vector<double>* clearance) {

@@ -77,6 +77,10 @@ class ClearanceCertifier {
                const std::vector<std::pair<int, int>>& in_contact,
                const std::vector<GlobalContactStage::Viewed>& viewed,
                std::vector<double>* clearance);
+  /// The certificate of a stage's last pass, at the `poses` it ran on: the surface pairs of
+  /// `tracked` (the servo's contacts) and of the pass's found() left out, its viewed() taken.
+  void Certify(const std::vector<BodyPose>& poses, const std::vector<GlobalContact>& tracked,
+               const GlobalContactStage& stage, std::vector<double>* clearance);
 
   /// Lower bound on the distance between surfaces a and b at `poses`, m (the step above for one
   /// surface pair; may be ≤ 0).
@@ -89,6 +93,7 @@ class ClearanceCertifier {
  private:
   std::unique_ptr<Impl> impl_;
   std::vector<std::pair<int, int>> body_pairs_;
+  std::vector<std::pair<int, int>> in_contact_;  ///< Certify's workspace
 };
 
 }  // namespace tangent::contact

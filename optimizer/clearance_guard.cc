@@ -30,9 +30,8 @@ double ClearanceGuard::Motion(int b, const Eigen::VectorXd& q_ref, const Eigen::
   const double translation = std::max((t0 - t_ref).norm(), (t1 - t_ref).norm());
   const double reach = reach_[static_cast<size_t>(b)];
   if (reach == 0.0) return translation;
-  // cos and sin of half the rotation angles, from the unit quaternions' dot products (|⟨Q, Q'⟩|
-  // = cos(θ/2), either sign of a quaternion being the same rotation).
-  // (From the raw coordinates: |⟨Q, Q'⟩| / (|Q| |Q'|), one square root per pair.)
+  // cos and sin of half the rotation angles: cos(θ/2) = |⟨Q, Q'⟩| / (|Q| |Q'|) from the raw
+  // coordinates (either sign of a quaternion is the same rotation), one square root a pair.
   const auto Q_ref = q_ref.segment<4>(o + 3);
   const auto Q0 = q.segment<4>(o + 3);
   const Eigen::Vector4d Q1 = Q0 + alpha * step.segment<4>(o + 3);

@@ -55,8 +55,6 @@ class ClearanceGuard {
     for (double c : clearance_) armed_ = armed_ || c < kInfinity;
     return true;
   }
-  /// Forgets the certificate (nothing guarded).
-  void Disarm() { armed_ = false; }
   bool armed() const { return armed_; }
 
   /// The largest fraction α ∈ [0, 1] of `step` from q (by bisection, to 2⁻²⁰) keeping every

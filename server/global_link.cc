@@ -7,14 +7,7 @@
 namespace tangent::server {
 
 void GlobalLink::Certify(const Snapshot& snapshot) {
-  in_contact_.clear();
-  for (const contact::GlobalContact& c : tracked_) {
-    in_contact_.emplace_back(std::min(c.a, c.b), std::max(c.a, c.b));
-  }
-  for (const contact::GlobalContact& c : stage_.found()) {
-    in_contact_.emplace_back(std::min(c.a, c.b), std::max(c.a, c.b));
-  }
-  certifier_.Certify(poses_, in_contact_, stage_.viewed(), &clearance_);
+  certifier_.Certify(poses_, tracked_, stage_, &clearance_);
   clearances_.tick = snapshot.tick;
   clearances_.num_bodies = snapshot.num_bodies;
   for (int b = 0; b < snapshot.num_bodies; ++b) {

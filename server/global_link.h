@@ -39,7 +39,7 @@ class GlobalLink {
 
  private:
   /// The certificate at the snapshot's poses, leaving out the surface pairs in contact: those
-  /// the servo tracks and those the pass found (added).
+  /// the servo tracks and those the pass found.
   void Certify(const Snapshot& snapshot);
 
   contact::GlobalContactStage stage_;
@@ -47,7 +47,6 @@ class GlobalLink {
   std::vector<contact::BodyPose> poses_;
   std::vector<contact::GlobalContact> tracked_;
   std::vector<contact::ContactEvent> events_;
-  std::vector<std::pair<int, int>> in_contact_;
   std::vector<double> clearance_;
   ClearanceMsg clearances_;
 };

@@ -87,13 +87,13 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
     throw SceneError(scene->path + ": the contact pairs reserve " + std::to_string(slot_count) +
                      " contact slots, more than " + std::to_string(kMaxContacts));
   }
-  // Contacts present at the initial poses: one cold global pass.
+  // Contacts present at the initial poses: one cold global pass (kept for the first clearance
+  // certificate, StartClearanceGuard).
   std::vector<contact::ContactEvent> events;
-  {
-    contact::GlobalContactStage stage(GlobalSurfaces(), GlobalPairs(), GlobalBodyPairs(),
-                                      GlobalStageOptions());
-    stage.Run(poses_, {}, &events);
-  }
+  contact::GlobalContactStage stage(GlobalSurfaces(), GlobalPairs(), GlobalBodyPairs(),
+                                    GlobalStageOptions());
+  stage.Run(poses_, {}, &events);
+  const std::vector<contact::BodyPose> pass_poses = poses_;
   for (const ContactPairSpec& pair : scene->pairs) {
     const SceneSurface& sa = scene->surfaces[static_cast<size_t>(pair.surface_a)];
     const SceneSurface& sb = scene->surfaces[static_cast<size_t>(pair.surface_b)];
@@ -229,7 +229,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   solver_->set_options(so);
   solver_->Solve(&q_);
   p.mechanism().Poses(q_, &poses_);
-  StartClearanceGuard();
+  StartClearanceGuard(stage, pass_poses);
   device_origin_ = scene->device.origin_given ? scene->device.origin : GraspPoint();
   target_ = GraspPoint();
   grasp_state_->target = target_;

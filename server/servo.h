@@ -234,7 +234,10 @@ class ServoLoop {
   LineContacts lines_;
   /// The step's clearance guard (servo_clearance.cc), armed from the constructor's pass.
   optimizer::ClearanceGuard guard_;
-  void StartClearanceGuard();
+  /// Configures the guard and takes its first certificate from the constructor's cold pass
+  /// (`stage`, run at `pass_poses`).
+  void StartClearanceGuard(const contact::GlobalContactStage& stage,
+                           const std::vector<contact::BodyPose>& pass_poses);
   /// After a good tick: line-like contacts go to line mode (their rows retired, the sections
   /// placed), lines follow, and lines no longer line-like resume their point contact (lines_).
   void FollowLines();

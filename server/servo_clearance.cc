@@ -11,7 +11,8 @@
 
 namespace tangent::server {
 
-void ServoLoop::StartClearanceGuard() {
+void ServoLoop::StartClearanceGuard(const contact::GlobalContactStage& stage,
+                                    const std::vector<contact::BodyPose>& pass_poses) {
   const std::vector<contact::GlobalSurface> surfaces = GlobalSurfaces();
   const std::vector<std::pair<int, int>> pairs = GlobalPairs();
   const std::vector<std::pair<int, int>> body_pairs = GlobalBodyPairs();
@@ -25,29 +26,23 @@ void ServoLoop::StartClearanceGuard() {
   guard_.Configure(m, contact::WatchedBodyPairs(surfaces, pairs, body_pairs), std::move(reach));
   if (!options_.clearance_guard) return;
   solver_->set_clearance_guard(&guard_);
-  // The first certificate, at the settled poses, from a pass of the stage there (the surface
-  // pairs in contact left out).
-  contact::GlobalContactStage stage(surfaces, pairs, body_pairs, GlobalStageOptions());
+  // The first certificate, from the cold pass at the initial poses. The pass found the touching
+  // pairs; the active slots (floating pairs seeded from samples among them) are left out too.
+  // Taken only if the settled configuration lies within it; else the first pass's is.
   std::vector<contact::GlobalContact> tracked;
   for (const Slot& s : slots_) {
     if (!s.state->active) continue;
     contact::GlobalContact c;
     c.a = s.surface_a;
     c.b = s.surface_b;
-    c.u = s.U();
     tracked.push_back(c);
   }
-  std::vector<contact::ContactEvent> events;
-  stage.Run(poses_, tracked, &events);
-  std::vector<std::pair<int, int>> in_contact;
-  for (const auto& c : tracked) in_contact.emplace_back(c.a, c.b);
-  for (const auto& c : stage.found()) in_contact.emplace_back(c.a, c.b);
   contact::ClearanceCertifier certifier(surfaces, pairs, body_pairs,
                                         0.5 * GlobalStageOptions().activation);
   std::vector<double> clearance;
-  certifier.Certify(poses_, in_contact, stage.viewed(), &clearance);
+  certifier.Certify(pass_poses, tracked, stage, &clearance);
   guard_.Adopt(
-      q_, [&](int b) { return poses_[static_cast<size_t>(b)].q; }, clearance.data());
+      q_, [&](int b) { return pass_poses[static_cast<size_t>(b)].q; }, clearance.data());
 }
 
 bool ServoLoop::AdoptClearances(const ClearanceMsg& m) {
