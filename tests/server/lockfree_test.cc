@@ -16,34 +16,51 @@ struct Big {
   long a[64];
 };
 
-TEST(LockFreeTest, SeqlockReadersNeverSeeATornValue) {
-  // The writer goes on until the reader has overlapped it many times: on a loaded machine the
-  // reader thread may not be scheduled at all during a fixed number of writes.
-  constexpr long kMinWrites = 200000, kMinReads = 20000;
-  Seqlock<Big> lock;
+constexpr long kMinWrites = 200000, kMinReads = 20000;
+
+// A reader racing a writer that writes Big{k, k, ...} for k = 1, 2, ...: the writer goes on
+// until the reader has overlapped it many times (on a loaded machine the reader thread may not
+// be scheduled at all during a fixed number of writes). `read(Big*)` returns the version read
+// (0: nothing read).
+struct Race {
+  long reads = 0, refused = 0, torn = 0, backwards = 0;
+};
+template <class Read>
+Race RaceAWriter(Seqlock<Big>* lock, Read&& read) {
   std::atomic<bool> done{false};
   std::atomic<long> reads{0};
   std::thread writer([&] {
-    Big b;
+    Big w;
     for (long k = 1; k <= kMinWrites || reads.load(std::memory_order_relaxed) < kMinReads; ++k) {
-      for (long& x : b.a) x = k;
-      lock.Write(b);
+      for (long& x : w.a) x = k;
+      lock->Write(w);
     }
     done = true;
   });
-  long torn = 0, last = 0, backwards = 0;
+  Race r;
+  long last = 0;
   Big b;
   while (!done) {
-    if (lock.Read(&b) == 0) continue;
+    if (read(&b) == 0) {
+      ++r.refused;
+      continue;
+    }
     reads.fetch_add(1, std::memory_order_relaxed);
-    for (long x : b.a) torn += x != b.a[0];
-    backwards += b.a[0] < last;
+    for (long x : b.a) r.torn += x != b.a[0];
+    r.backwards += b.a[0] < last;
     last = b.a[0];
   }
   writer.join();
-  EXPECT_GE(reads.load(), kMinReads);
-  EXPECT_EQ(torn, 0);
-  EXPECT_EQ(backwards, 0);
+  r.reads = reads.load();
+  return r;
+}
+
+TEST(LockFreeTest, SeqlockReadersNeverSeeATornValue) {
+  Seqlock<Big> lock;
+  const Race r = RaceAWriter(&lock, [&](Big* b) { return lock.Read(b); });
+  EXPECT_GE(r.reads, kMinReads);
+  EXPECT_EQ(r.torn, 0);
+  EXPECT_EQ(r.backwards, 0);
 }
 
 TEST(LockFreeTest, SeqlockTryReadNeverWaitsAndNeverReportsATornValue) {
@@ -52,31 +69,12 @@ TEST(LockFreeTest, SeqlockTryReadNeverWaitsAndNeverReportsATornValue) {
   Seqlock<Big> lock;
   Big b;
   EXPECT_EQ(lock.TryRead(&b), 0u);  // nothing written yet
-  constexpr long kMinWrites = 200000, kMinReads = 20000;
-  std::atomic<bool> done{false};
-  std::atomic<long> reads{0};
-  std::thread writer([&] {
-    Big w;
-    for (long k = 1; k <= kMinWrites || reads.load(std::memory_order_relaxed) < kMinReads; ++k) {
-      for (long& x : w.a) x = k;
-      lock.Write(w);
-    }
-    done = true;
-  });
-  long torn = 0, refused = 0;
-  while (!done) {
-    if (lock.TryRead(&b) == 0) {
-      ++refused;
-      continue;
-    }
-    reads.fetch_add(1, std::memory_order_relaxed);
-    for (long x : b.a) torn += x != b.a[0];
-  }
-  writer.join();
-  EXPECT_GE(reads.load(), kMinReads);
-  EXPECT_EQ(torn, 0);
+  const Race r = RaceAWriter(&lock, [&](Big* out) { return lock.TryRead(out); });
+  EXPECT_GE(r.reads, kMinReads);
+  EXPECT_EQ(r.torn, 0);
+  EXPECT_EQ(r.backwards, 0);
   std::printf("TryRead: %ld reads whole, %ld refused (a write in progress or overlapping)\n",
-              reads.load(), refused);
+              r.reads, r.refused);
   EXPECT_EQ(lock.TryRead(&b), lock.version());
 }
 
