@@ -11,6 +11,7 @@
 #include <string>
 
 #include "contact/box_newton.h"
+#include "contact/face_gap.h"
 #include "contact/global_minima.h"
 #include "contact/global_watched.h"
 #include "contact/offset_chunks.h"
@@ -45,28 +46,11 @@ using internal::MinimaBeside;
 using internal::SamePoints;
 using internal::WorldBox;
 
-// World box of a surface-frame box (centre c, half extents h) under pose p: exact for the box.
-WorldBox Place(const BodyPose& p, const Eigen::Vector3d& c, const Eigen::Vector3d& h) {
-  const Eigen::Vector3d x = p.Point(c);
-  const Eigen::Vector3d e = p.R_WB.cwiseAbs() * h;
-  return {x - e, x + e};
-}
+using internal::Place;
 
 using internal::Watched;
 
-struct Seed {
-  Eigen::Vector4d u;
-  Eigen::Vector3d x;  // where the offset meshes met (world)
-  // The cluster of seeds neglected in its favour: parameter sums (periodic directions as unit
-  // vectors on the circle), for the cluster's mean.
-  Eigen::Vector4d sum = Eigen::Vector4d::Zero(), sum_cos = Eigen::Vector4d::Zero(),
-                  sum_sin = Eigen::Vector4d::Zero();
-  int count = 0;
-  // A few members kept as fallback seeds (the 2nd, 8th, 32nd, 128th of the cluster).
-  std::array<Eigen::Vector4d, 4> members{Eigen::Vector4d::Zero(), Eigen::Vector4d::Zero(),
-                                         Eigen::Vector4d::Zero(), Eigen::Vector4d::Zero()};
-  int n_members = 0;
-};
+using internal::Seed;
 
 // Parameters of world point x on offset triangle t of a watched surface: barycentric
 // coordinates of x projected on the triangle (clamped inside), applied to the vertices' (u, v).
@@ -138,35 +122,6 @@ Eigen::Vector3d Centroid(const Watched& w, const BodyPose& pose, int t) {
 
 }  // namespace
 
-struct GlobalContactStage::Impl {
-  std::vector<Watched> watched;
-  // The declared pairs: surface pairs (a < b, sorted) and body pairs (num_bodies²): memory grows
-  // with the declarations and the bodies, not with the faces' pairs.
-  std::vector<std::pair<int, int>> surface_declared;
-  std::vector<char> body_declared;
-  int num_bodies = 0;
-  std::unique_ptr<fcl::BroadPhaseCollisionManagerd> manager;
-  // Surface pairs the broad phase reported (a < b), then the chunk pairs of each whose world
-  // boxes overlap: (surface a, surface b, chunk of a, chunk of b).
-  std::vector<std::pair<int, int>> surface_pairs;
-  std::vector<std::array<int, 4>> candidates;
-  std::vector<int> near_a, near_b;
-  // Per surface pair in FindContacts (kept to reuse their storage): the seeds accepted (tracked
-  // contacts first, then clusters) and the offset-triangle pairs of the narrow phase.
-  std::vector<Seed> accepted;
-  std::vector<std::pair<int, int>> triangle_pairs;
-  // The surface pairs whose offsets crossed this pass (FindNested skips them).
-  std::vector<std::pair<int, int>> crossed;
-  int n = 0, pass = 0;
-  bool Allowed(int a, int b) const {
-    const int ba = watched[static_cast<size_t>(a)].s.body,
-              bb = watched[static_cast<size_t>(b)].s.body;
-    if (body_declared[static_cast<size_t>(ba * num_bodies + bb)]) return true;
-    return std::binary_search(surface_declared.begin(), surface_declared.end(),
-                              std::make_pair(std::min(a, b), std::max(a, b)));
-  }
-};
-
 namespace {
 
 bool BroadPhaseCallback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* data) {
@@ -192,7 +147,11 @@ namespace {
 Watched WatchSurface(int index, const GlobalSurface& s, const GlobalOptions& options) {
   Watched w;
   w.s = s;
-  if (s.trim) w.edges = std::make_unique<TrimEdges>(s.surface, s.trim);
+  if (s.trim) {
+    w.edges = std::make_unique<TrimEdges>(s.surface, s.trim);
+  } else if (options.face_pairs) {
+    w.flat = nurbs::FlatQuadOf(*s.surface);
+  }
   w.chunks = BuildChunks(*s.mesh, options.chunk_u_cells, options.chunk_v_cells);
   w.placed.resize(w.chunks.size());
   w.placed_at.assign(w.chunks.size(), -1);
@@ -200,6 +159,15 @@ Watched WatchSurface(int index, const GlobalSurface& s, const GlobalOptions& opt
   for (const Eigen::Vector3d& x : s.mesh->vertices) {
     lo = lo.cwiseMin(x);
     hi = hi.cwiseMax(x);
+  }
+  // A flat face's offset is a sheet parallel to it, and two faces resting on each other have
+  // sheets on either side of both: its box also holds the face itself (its corners), so that the
+  // broad phase reports the pair.
+  if (w.flat) {
+    for (const Eigen::Vector3d& x : w.flat->points) {
+      lo = lo.cwiseMin(x);
+      hi = hi.cwiseMax(x);
+    }
   }
   w.centre = 0.5 * (lo + hi);
   w.half = 0.5 * (hi - lo);
@@ -396,6 +364,7 @@ void GlobalContactStage::BroadPhase(const std::vector<BodyPose>& poses, GlobalSt
     }
   };
   for (const auto& [a, b] : m.surface_pairs) {
+    if (m.FacePair(a, b)) continue;  // (their corners are measured instead: FindFaces)
     Watched& wa = m.watched[static_cast<size_t>(a)];
     Watched& wb = m.watched[static_cast<size_t>(b)];
     const BodyPose& pa = poses[static_cast<size_t>(wa.s.body)];
@@ -649,26 +618,6 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
   }
 }
 
-void GlobalContactStage::FindNested(const std::vector<BodyPose>& poses,
-                                    const std::vector<GlobalContact>& tracked, GlobalStats* st) {
-  Impl& m = *impl_;
-  for (const auto& [a, b] : m.surface_pairs) {
-    const Watched& wa = m.watched[static_cast<size_t>(a)];
-    const Watched& wb = m.watched[static_cast<size_t>(b)];
-    if (wa.edges || wb.edges ||
-        std::find(m.crossed.begin(), m.crossed.end(), std::make_pair(a, b)) != m.crossed.end() ||
-        std::any_of(tracked.begin(), tracked.end(),
-                    [&](const GlobalContact& c) { return c.a == a && c.b == b; })) {
-      continue;
-    }
-    const BodyPose& pa = poses[static_cast<size_t>(wa.s.body)];
-    const BodyPose& pb = poses[static_cast<size_t>(wb.s.body)];
-    if (!Place(pa, wa.centre, wa.half).MostlyShares(Place(pb, wb.centre, wb.half))) continue;
-    ++st->seeds_refined;
-    internal::NestedPairMinimum(*wa.s.surface, pa, *wb.s.surface, pb, options_, a, b, &found_);
-  }
-}
-
 void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
                                 const std::vector<GlobalContact>& tracked,
                                 std::vector<ContactEvent>* events) {
@@ -692,6 +641,20 @@ void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
     const Watched& wb = m.watched[static_cast<size_t>(c.b)];
     const BodyPose& pa = poses[static_cast<size_t>(wa.s.body)];
     const BodyPose& pb = poses[static_cast<size_t>(wb.s.body)];
+    if (m.FacePair(c.a, c.b)) {
+      // Two flat faces: held by their corners while some corner lies over the other face
+      // within the release distance.
+      const FaceCorner low = LowestCorner(*wa.s.surface, *wa.flat, pa, *wb.s.surface, *wb.flat, pb);
+      const GlobalContact now{c.a, c.b, c.u, low.beta, low.p_f, low.p_g};
+      if (!low.found || low.beta > options_.release) {
+        events->push_back(
+            {ContactEvent::Kind::kRemoved,
+             low.found ? ContactEvent::Reason::kSeparated : ContactEvent::Reason::kLeftDomain,
+             now});
+        removed_[k] = 1;
+      }
+      continue;
+    }
     // The servo holds its contacts at extremal parameters (the snapshot's u and poses are one
     // tick's): taken as they are when they still solve the contact equations, else re-solved.
     // (Newton from an extremum that is nearly degenerate, as where two wires turn parallel,
@@ -795,6 +758,7 @@ void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
     first = last;
   }
   FindNested(poses, tracked, &st);
+  FindFaces(poses, tracked, &st);
   st.found = static_cast<int>(found_.size());
   Events(poses, tracked, events);
   std::sort(found_.begin(), found_.end(), [](const GlobalContact& x, const GlobalContact& y) {

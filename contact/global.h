@@ -35,6 +35,10 @@ struct GlobalOptions {
   /// servo holds such a pair as a line (ServoOptions::line_contacts, server/line_contacts.h):
   /// as a point it is degenerate.
   bool accept_continuum = false;
+  /// Hold declared pairs of two untrimmed flat faces (nurbs/flat.h) by their corners
+  /// (FindFaces): found and kept by the corner of either face lying over the other nearest to it
+  /// (contact/face_gap.h), as the servo holds them (server/face_contacts.h).
+  bool face_pairs = true;
   /// A contact is added when its extremal distance β falls below `activation` and removed when
   /// it rises above `release` (> activation: hysteresis), leaves the domain, or is lost. The
   /// offsets of each declared pair's two meshes must reach 2 x `release` together (a face's
@@ -154,6 +158,12 @@ class GlobalContactStage {
   /// (contact/global_minima.h).
   void FindNested(const std::vector<BodyPose>& poses, const std::vector<GlobalContact>& tracked,
                   GlobalStats* st);
+  /// 4c. Face pairs: declared pairs of two flat faces (nurbs/flat.h) the broad phase reported,
+  /// with nothing tracked: the corner of either lying over the other nearest to it
+  /// (contact/face_gap.h). (Their offsets are parallel sheets that never cross, and their
+  /// extremal pair is a continuum or a domain corner: the narrow phase does not see them.)
+  void FindFaces(const std::vector<BodyPose>& poses, const std::vector<GlobalContact>& tracked,
+                 GlobalStats* st);
   /// 5. Events with hysteresis: tracked contacts re-solved (removals; a saddle split into the
   /// minima beside it, two at one point merged), found ones added.
   void Events(const std::vector<BodyPose>& poses, const std::vector<GlobalContact>& tracked,

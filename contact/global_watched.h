@@ -1,9 +1,10 @@
 #pragma once
 
 // A surface the global contact stage watches (global.cc): its offset mesh's blocks and their
-// world boxes, its trim edges, and the arc-length metric of its parameter domain (through its
-// pole rows) that the spheres of neglect measure with. Internal to tangent_contact (it includes
-// FCL). Split from global.cc by concept.
+// world boxes, its trim edges or its corners (a flat face), and the arc-length metric of its
+// parameter domain (through its pole rows) that the spheres of neglect measure with; and the
+// stage's own data (GlobalContactStage::Impl), shared by global.cc and global_conformal.cc.
+// Internal to tangent_contact (it includes FCL). Split from global.cc by concept.
 
 #include <fcl/fcl.h>
 
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -20,12 +22,14 @@
 #include "contact/global_minima.h"
 #include "contact/offset_chunks.h"
 #include "contact/trimmed.h"
+#include "nurbs/flat.h"
 
 namespace tangent::contact::internal {
 
 struct Watched {
   GlobalSurface s;
-  std::unique_ptr<TrimEdges> edges;  // when trimmed
+  std::unique_ptr<TrimEdges> edges;     // when trimmed
+  std::optional<nurbs::FlatQuad> flat;  // when a flat quadrilateral face, untrimmed (face_gap.h)
   std::vector<Chunk> chunks;
   // The whole offset mesh's box (surface frame) as an FCL box: the object the broad-phase
   // manager sees.
@@ -81,4 +85,68 @@ struct Watched {
   }
 };
 
+// A seed of the narrow phase, with the cluster neglected in its favour (global.cc).
+struct Seed {
+  Eigen::Vector4d u;
+  Eigen::Vector3d x;  // where the offset meshes met (world)
+  // The cluster of seeds neglected in its favour: parameter sums (periodic directions as unit
+  // vectors on the circle), for the cluster's mean.
+  Eigen::Vector4d sum = Eigen::Vector4d::Zero(), sum_cos = Eigen::Vector4d::Zero(),
+                  sum_sin = Eigen::Vector4d::Zero();
+  int count = 0;
+  // A few members kept as fallback seeds (the 2nd, 8th, 32nd, 128th of the cluster).
+  std::array<Eigen::Vector4d, 4> members{Eigen::Vector4d::Zero(), Eigen::Vector4d::Zero(),
+                                         Eigen::Vector4d::Zero(), Eigen::Vector4d::Zero()};
+  int n_members = 0;
+};
+
+// World box of a surface-frame box (centre c, half extents h) under pose p: exact for the box.
+inline WorldBox Place(const BodyPose& p, const Eigen::Vector3d& c, const Eigen::Vector3d& h) {
+  const Eigen::Vector3d centre = p.Point(c);
+  const Eigen::Vector3d e = p.R_WB.cwiseAbs() * h;
+  return {centre - e, centre + e};
+}
+
 }  // namespace tangent::contact::internal
+
+namespace tangent::contact {
+
+// The stage's own data: the watched surfaces, the declarations, the broad phase and each
+// pass's workspace (global.cc; the conformal finders in global_conformal.cc).
+struct GlobalContactStage::Impl {
+  std::vector<internal::Watched> watched;
+  // The declared pairs: surface pairs (a < b, sorted) and body pairs (num_bodies²): memory grows
+  // with the declarations and the bodies, not with the faces' pairs.
+  std::vector<std::pair<int, int>> surface_declared;
+  std::vector<char> body_declared;
+  int num_bodies = 0;
+  std::unique_ptr<fcl::BroadPhaseCollisionManagerd> manager;
+  // Surface pairs the broad phase reported (a < b), then the chunk pairs of each whose world
+  // boxes overlap: (surface a, surface b, chunk of a, chunk of b).
+  std::vector<std::pair<int, int>> surface_pairs;
+  std::vector<std::array<int, 4>> candidates;
+  std::vector<int> near_a, near_b;
+  // Per surface pair in FindContacts (kept to reuse their storage): the seeds accepted (tracked
+  // contacts first, then clusters) and the offset-triangle pairs of the narrow phase.
+  std::vector<internal::Seed> accepted;
+  std::vector<std::pair<int, int>> triangle_pairs;
+  // The surface pairs whose offsets crossed this pass (FindNested skips them).
+  std::vector<std::pair<int, int>> crossed;
+  int n = 0, pass = 0;
+  bool Allowed(int a, int b) const {
+    const int ba = watched[static_cast<size_t>(a)].s.body,
+              bb = watched[static_cast<size_t>(b)].s.body;
+    if (body_declared[static_cast<size_t>(ba * num_bodies + bb)]) return true;
+    return std::binary_search(surface_declared.begin(), surface_declared.end(),
+                              std::make_pair(std::min(a, b), std::max(a, b)));
+  }
+  /// A declared surface pair (a < b) of two flat faces: held by their corners (FindFaces), not
+  /// by the narrow phase's extrema.
+  bool FacePair(int a, int b) const {
+    return watched[static_cast<size_t>(a)].flat && watched[static_cast<size_t>(b)].flat &&
+           std::binary_search(surface_declared.begin(), surface_declared.end(),
+                              std::make_pair(a, b));
+  }
+};
+
+}  // namespace tangent::contact

@@ -188,9 +188,10 @@ class PointOnSurfaceTerm final : public Term {
                           TermHessian* h) const override;
   std::unique_ptr<TermState> MakeState() const override;
 
- private:
+  /// The point's closest point on the surface at `poses` (solved when they changed).
   void Update(const std::vector<BodyPose>& poses, State* st) const;
 
+ private:
   Attachment point_;
   int body_s_;
   const nurbs::NurbsSurface* s_;

@@ -17,6 +17,7 @@
 #include "optimizer/goals.h"
 #include "optimizer/problem.h"
 #include "optimizer/solver.h"
+#include "server/face_contacts.h"
 #include "server/line_contacts.h"
 #include "server/messages.h"
 #include "server/scene.h"
@@ -54,6 +55,10 @@ struct ServoOptions {
   /// 1.37x the instructions (docs/reliability.md, "Soak").
   bool line_contacts = false;
   LineContactOptions line;
+  /// Face contacts (server/face_contacts.h): a declared pair of two untrimmed flat faces is held
+  /// by the corners of each lying over the other (contact::GlobalOptions::face_pairs). Off, such
+  /// a pair has slots as any other, and nothing finds it (docs/contact.md, "Face contacts").
+  bool face_contacts = true;
   /// optimizer::SolverOptions::step_reach (off by default, as line_contacts).
   bool step_reach = false;
   /// No tunnelling (docs/stability.md): every step is kept within the global stage's last
@@ -126,6 +131,7 @@ class ServoLoop {
   contact::GlobalOptions GlobalStageOptions() const {
     contact::GlobalOptions o = scene_->global;
     o.accept_continuum = options_.line_contacts;
+    o.face_pairs = options_.face_contacts;
     return o;
   }
   /// p_WT: a device sample's tool point T in the world W (m).
@@ -143,6 +149,13 @@ class ServoLoop {
       f[i] = scene_->device.stiffness * solver_->inequality_multipliers()[lines_.row(k, i)];
     }
     return f;
+  }
+  /// The face contacts' corner rows (server/face_contacts.h).
+  const FaceContacts& faces() const { return faces_; }
+  /// Face pair k's corner loads (N; FaceContacts' order): their multipliers in the units of the
+  /// reported contact forces.
+  double FaceLoad(int k, int i) const {
+    return scene_->device.stiffness * solver_->inequality_multipliers()[faces_.row(k, i)];
   }
   const optimizer::Problem& problem() const { return *problem_; }
   /// The grasp goal's target (world, m): follows the tool point at the device's follow speed.
@@ -246,6 +259,10 @@ class ServoLoop {
   /// The snapshot's contacts from *count on: each pair in line mode as its middle section.
   void FillLineContacts(Snapshot* s, int* count) const;
   // (FollowLines, ResumePoint and FillLineContacts are in servo_lines.cc.)
+  FaceContacts faces_;
+  /// The snapshot's contacts from *count on: each held face pair as its lowest corner, with the
+  /// corners' load (servo_faces.cc).
+  void FillFaceContacts(Snapshot* s, int* count) const;
   Eigen::VectorXd q_;
   std::vector<contact::BodyPose> poses_;
   // Last good state (restored after a fault).

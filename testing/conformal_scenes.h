@@ -58,4 +58,39 @@ inline constexpr const char* kSocketScene = R"JSON({
   "global_stage": {"neglect_radius": 6}
 })JSON";
 
+// A box of 20 x 20 x 10 mm resting on its bottom face 0.05 mm over a 60 mm square floor: a face
+// contact (both faces flat, their extremal pair a continuum). Only the bottom face and the floor
+// are a declared pair: the box's other faces lie above its bottom corners for any tilt under a
+// right angle. The grasp is at the box's centre.
+inline constexpr const char* kBoxScene = R"JSON({
+  "name": "box on a floor",
+  "length_unit": "mm",
+  "bodies": [
+    {"name": "ground", "fixed": true},
+    {"name": "box", "position": [0, 0, 0.05], "mass": 0.01, "inertia": [4e-07, 4e-07, 7e-07]}
+  ],
+  "surfaces": [
+    {"name": "floor", "body": "ground", "type": "plane_patch", "origin": [-30, -30, 0],
+     "edge_u": [60, 0, 0], "edge_v": [0, 60, 0]},
+    {"name": "bottom", "body": "box", "type": "plane_patch", "origin": [-10, -10, 0],
+     "edge_u": [0, 20, 0], "edge_v": [20, 0, 0]},
+    {"name": "top", "body": "box", "type": "plane_patch", "origin": [-10, -10, 10],
+     "edge_u": [20, 0, 0], "edge_v": [0, 20, 0]},
+    {"name": "side_px", "body": "box", "type": "plane_patch", "origin": [10, -10, 0],
+     "edge_u": [0, 20, 0], "edge_v": [0, 0, 10]},
+    {"name": "side_nx", "body": "box", "type": "plane_patch", "origin": [-10, -10, 0],
+     "edge_u": [0, 0, 10], "edge_v": [0, 20, 0]},
+    {"name": "side_py", "body": "box", "type": "plane_patch", "origin": [-10, 10, 0],
+     "edge_u": [0, 0, 10], "edge_v": [20, 0, 0]},
+    {"name": "side_ny", "body": "box", "type": "plane_patch", "origin": [-10, -10, 0],
+     "edge_u": [20, 0, 0], "edge_v": [0, 0, 10]}
+  ],
+  "contacts": [{"a": "floor", "b": "bottom", "kind": "unilateral", "max_contacts": 2}],
+  "grasp": {"body": "box", "point": [0, 0, 5], "hold_orientation": 0.01,
+            "rotational_stiffness": 0.2},
+  "device": {"id": 1, "scale": 1.0, "stiffness": 300, "damping": 1.0, "max_force": 3.3,
+             "max_force_rate": 500, "ramp_time": 1.0},
+  "offset": {"tolerance": 0.02, "margin": 0.25}
+})JSON";
+
 }  // namespace tangent::testing

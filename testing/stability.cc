@@ -507,6 +507,13 @@ std::vector<ServoSpec> ServoSpecs(const std::string& scenes_dir, double seconds)
                      return Eigen::Vector3d(r * std::cos(a), r * std::sin(a), press(t));
                    },
                    seconds, Outcome::kConverged, "a patch contact, found nested, on two poles"});
+  specs.push_back({"conformal contact", "box's face on a floor, pressed and pushed round",
+                   [] { return server::ParseScene(kBoxScene, "box"); },
+                   [press](double t) {
+                     const double a = 2 * std::numbers::pi * t, r = t > 0.5 ? 5e-3 : 0.0;
+                     return Eigen::Vector3d(r * std::cos(a), r * std::sin(a), press(t));
+                   },
+                   seconds, Outcome::kConverged, "a face contact: held by its four corners"});
   return specs;
 }
 

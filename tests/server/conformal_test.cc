@@ -236,5 +236,180 @@ TEST(ConformalTest, ABallInASocketIsHeldPressedTurnedAndPushedRound) {
   EXPECT_EQ(run.allocations, 0);
 }
 
+// Issue 33's third canonical case: a box's flat bottom face on a flat floor
+// (testing/conformal_scenes.h), held by the corners of the face (server/face_contacts.h).
+struct BoxOutcome {
+  double worst_violation = 0.0;
+  double lowest_corner = 1.0;  ///< the box's lowest bottom corner's height over the floor (m)
+  double press_force = 0.0;    ///< mean F_z pressed and still (2–3 s)
+  Eigen::Vector4d press_loads = Eigen::Vector4d::Zero();  ///< the four corners' loads at 3 s
+  double push_force_min = 1e9, push_force_max = 0.0;      ///< F_z while pushed along x (3.5–5 s)
+  /// Tilted (6–8 s): the largest |F_z − the corners' summed load|, and the largest load on a
+  /// corner of the raised side while the box stands on its other edge.
+  double worst_balance = 0.0, raised_load = 0.0;
+  double tilted = 0.0;  ///< the box's largest turn from its start (rad)
+  /// At the tilts' peaks (6 s and 8 s: the hand still), F_z and the box's turn (rad).
+  double peak_force[2] = {0.0, 0.0}, peak_tilt[2] = {0.0, 0.0};
+  double max_force_step = 0.0;
+  long allocations = 0;  ///< in the servo's ticks from 3.5 s
+  int held_steps = 0;    ///< device steps with the face pair held
+};
+
+// 1 kHz device states, four servo ticks each, a global pass per device step. From 1 s the hand
+// presses 2 mm down; from 3 s it pushes the box ±5 mm along x; from 5 s, still pressing, it
+// tilts it about x, 12° each way (peaks at 6 s and 8 s).
+BoxOutcome DriveBox(bool faces, double seconds) {
+  auto scene = ParseScene(testing::kBoxScene, "box.json");
+  ServoOptions options;
+  options.dof = 6;
+  options.face_contacts = faces;
+  ServoLoop servo(*scene, options);
+  GlobalLink link(servo);
+  TickResult r;
+  Snapshot snap;
+  BoxOutcome out;
+  int64_t now = 1'000'000'000;
+  int pressed = 0;
+  const int box = scene->BodyIndex("box");
+  Eigen::Vector3d last_force = Eigen::Vector3d::Zero();
+  const double tilt = 12.0 * std::numbers::pi / 180.0;
+  for (int step = 1; step <= static_cast<int>(seconds * 1000); ++step) {
+    const double t = 1e-3 * step;
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    if (t > 1.0) p.z() = -2e-3 * std::min(1.0, t - 1.0);
+    if (t > 3.0 && t <= 5.0) p.x() = 5e-3 * std::sin(std::numbers::pi * (t - 3.0));
+    const double angle = t > 5.0 ? tilt * std::sin(std::numbers::pi * (t - 5.0) / 2.0) : 0.0;
+    const Eigen::Quaterniond q(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX()));
+    const DeviceSample s = bench::HandSample(step, now, p, q);
+    const long before = testing::AllocationCount();
+    for (int tick = 0; tick < 4; ++tick) {
+      servo.Tick(&s, now, &r);
+      now += 250'000;
+      out.worst_violation = std::max(out.worst_violation, r.violation);
+    }
+    if (t > 3.5) out.allocations += testing::AllocationCount() - before;
+    servo.FillSnapshot(&snap);
+    link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
+    servo.AdoptClearances(link.clearances());
+    const bool held = servo.faces().pairs() > 0 && servo.faces().held(0);
+    out.held_steps += held;
+    const Eigen::Vector3d f(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
+    out.max_force_step = std::max(out.max_force_step, (f - last_force).norm());
+    last_force = f;
+    const Eigen::Quaterniond turn(snap.q[box][3], snap.q[box][4], snap.q[box][5], snap.q[box][6]);
+    const Eigen::Vector3d centre(snap.q[box][0], snap.q[box][1], snap.q[box][2]);
+    const Eigen::Matrix3d R = turn.normalized().toRotationMatrix();
+    for (double x : {-10e-3, 10e-3}) {
+      for (double y : {-10e-3, 10e-3}) {
+        out.lowest_corner =
+            std::min(out.lowest_corner, (centre + R * Eigen::Vector3d(x, y, 0)).z());
+      }
+    }
+    out.tilted =
+        std::max(out.tilted, turn.normalized().angularDistance(Eigen::Quaterniond::Identity()));
+    if (t > 2.0 && t <= 3.0) {
+      out.press_force += f.z();
+      ++pressed;
+    }
+    // The corners' loads: the bottom face's four (f is the floor, the scene's first surface:
+    // the face's corners are g's, FaceContacts' 4–7).
+    Eigen::Vector4d loads = Eigen::Vector4d::Zero();
+    if (held) {
+      for (int i = 0; i < 4; ++i) loads[i] = servo.FaceLoad(0, 4 + i);
+    }
+    if (step == 3000) out.press_loads = loads;
+    if (step == 6000 || step == 8000) {
+      out.peak_force[step / 2000 - 3] = f.z();
+      out.peak_tilt[step / 2000 - 3] =
+          turn.normalized().angularDistance(Eigen::Quaterniond::Identity());
+    }
+    if (t > 3.5 && t <= 5.0) {
+      out.push_force_min = std::min(out.push_force_min, f.z());
+      out.push_force_max = std::max(out.push_force_max, f.z());
+    }
+    if (t > 6.0 && held) {
+      // Frictionless, massless at rest: the floor's push on the corners is the hand's on the box.
+      double all = 0.0;
+      for (int i = 0; i < FaceContacts::kCorners; ++i) all += servo.FaceLoad(0, i);
+      out.worst_balance = std::max(out.worst_balance, std::abs(f.z() - all));
+      // Standing on one edge (tilted beyond 3°): the corners of the raised edge carry nothing.
+      // The bottom face's corners in FlatQuad order: (u, v) = (0, 0), (1, 0), (1, 1), (0, 1),
+      // at y = −10, +10, +10, −10 mm (edge_u along +y).
+      if (std::abs(angle) > 3.0 * std::numbers::pi / 180.0) {
+        const bool raised_plus_y = angle > 0.0;  // turned about +x: +y rises
+        for (int i = 0; i < 4; ++i) {
+          const bool plus_y = i == 1 || i == 2;
+          if (plus_y == raised_plus_y) out.raised_load = std::max(out.raised_load, loads[i]);
+        }
+      }
+    }
+    if (faces && step % 1000 == 0) {
+      std::printf("  %.1f s: corner loads %.4f %.4f %.4f %.4f N, F_z %.4f N, tilt %.2f deg\n", t,
+                  loads[0], loads[1], loads[2], loads[3], f.z(), angle * 180 / std::numbers::pi);
+    }
+  }
+  if (pressed > 0) out.press_force /= pressed;
+  std::printf(
+      "%s: worst violation %.1e m, lowest corner %.2e m, pressing %.4f N (corners %.4f %.4f %.4f "
+      "%.4f N), pushed %.4f to %.4f N, tilted %.1f deg, |F_z - corner loads| %.1e N, raised "
+      "corners' load %.1e N, largest force step %.4f N, %ld allocations from 3.5 s, held %d of "
+      "%d device steps\n",
+      faces ? "face contacts" : "as slots", out.worst_violation, out.lowest_corner, out.press_force,
+      out.press_loads[0], out.press_loads[1], out.press_loads[2], out.press_loads[3],
+      out.push_force_min, out.push_force_max, out.tilted * 180 / std::numbers::pi,
+      out.worst_balance, out.raised_load, out.max_force_step, out.allocations, out.held_steps,
+      static_cast<int>(seconds * 1000));
+  return out;
+}
+
+// The box tilted by the hand stands on one edge of its bottom face: its turn θ and the hand's
+// F_z at rest solve the statics of the two springs (the coupling k at the centre, 5 mm over the
+// face and 10 mm in from the edge, its target 2 mm under the resting centre; the rotational
+// coupling's energy k_r (1 − cos(θ_t − θ)), docs/server.md) about that edge, frictionless:
+// d/dθ [½ k (h(θ) − z_t)² + k_r (1 − cos(θ_t − θ))] = 0, h(θ) = 10 sin θ + 5 cos θ mm.
+std::pair<double, double> TiltedStatics(double k, double k_r, double theta_t, double z_t) {
+  auto h = [](double t) { return 10e-3 * std::sin(t) + 5e-3 * std::cos(t); };
+  auto dh = [](double t) { return 10e-3 * std::cos(t) - 5e-3 * std::sin(t); };
+  auto dE = [&](double t) { return k * (h(t) - z_t) * dh(t) - k_r * std::sin(theta_t - t); };
+  double lo = 0.0, hi = theta_t;  // dE(0) < 0 < dE(θ_t)
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (dE(mid) < 0.0 ? lo : hi) = mid;
+  }
+  return {lo, k * (h(lo) - z_t)};
+}
+
+TEST(ConformalTest, ABoxOnAFloorIsHeldByItsFacesCornersPressedPushedAndTilted) {
+  const BoxOutcome run = DriveBox(true, 8.0);
+  const double k = 300.0, gap = 0.05e-3;
+  EXPECT_LE(run.worst_violation, 1e-6);
+  EXPECT_GE(run.lowest_corner, -1e-6);  // no corner through the floor
+  // Pressed 2 mm, it moves the gap: k (2 mm − gap), shared by the four corners.
+  EXPECT_NEAR(run.press_force, k * (2e-3 - gap), 1e-4);
+  EXPECT_NEAR(run.press_loads.sum(), k * (2e-3 - gap), 1e-4);
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(run.press_loads[i], k * (2e-3 - gap) / 4, 1e-3);
+  EXPECT_GT(run.push_force_min, k * (2e-3 - gap) - 1e-4);  // still pressed while pushed
+  EXPECT_LT(run.push_force_max, k * (2e-3 - gap) + 1e-4);
+  const auto [theta, force] = TiltedStatics(k, 0.2, 12.0 * std::numbers::pi / 180, 3.05e-3);
+  std::printf("tilted statics: %.4f deg, F_z %.5f N\n", theta * 180 / std::numbers::pi, force);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_NEAR(run.peak_tilt[i], theta, 1e-3);
+    EXPECT_NEAR(run.peak_force[i], force, 0.005 * force);
+  }
+  EXPECT_LT(run.worst_balance, 0.01);  // (the coupling's damping while it turns)
+  EXPECT_LT(run.raised_load, 1e-6);    // standing on one edge: the other carries nothing
+  EXPECT_LE(run.max_force_step, 0.5);  // the rate limit: 500 N/s over a 1 ms device step
+  EXPECT_EQ(run.allocations, 0);
+}
+
+TEST(ConformalTest, WithoutFaceContactsTheFloorDoesNotHoldTheBox) {
+  // The pair as extremal slots: the continuum is no contact the stage finds, nothing resists the
+  // press, and the face goes through the floor (what the corners above are for).
+  const BoxOutcome run = DriveBox(false, 3.0);
+  EXPECT_LT(std::abs(run.press_force), 0.1);
+  EXPECT_LT(run.lowest_corner, -1e-3);
+  EXPECT_EQ(run.held_steps, 0);
+}
+
 }  // namespace
 }  // namespace tangent::server
