@@ -566,7 +566,7 @@ bool ServoLoop::MoveScene(const DeviceSample* fresh_device, double dt, const Inj
   problem_->mechanism().Poses(q_, &poses_);
   if (!fault) {
     FollowLines();
-    faces_.Follow();
+    if (faces_.pairs() > 0) faces_.Follow();
   }
   out->fault = fault;
   out->iterations = st.iterations;

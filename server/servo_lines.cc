@@ -6,6 +6,7 @@
 namespace tangent::server {
 
 void ServoLoop::FollowLines() {
+  if (lines_.pairs() == 0) return;  // (no declared pair may hold a line: nothing to visit)
   // Pairs in line mode: the sections follow the line, or the point contact resumes.
   for (int k = 0; k < lines_.pairs(); ++k) {
     if (!lines_.line(k)) continue;
