@@ -93,4 +93,30 @@ inline constexpr const char* kBoxScene = R"JSON({
   "offset": {"tolerance": 0.02, "margin": 0.25}
 })JSON";
 
+// Two wire rings hooked through each other (tori of 1.2 mm major and 0.45 mm minor radius, the
+// tight hooks of docs/contact.md's relative-curvature tests): the fixed one in the xy plane about
+// the origin, the grasped one upright (its plane xz) touching it at their inner equators, at
+// (0.75, 0, 0) mm. Pulled apart, the hooks bear on each other; turned about the line between
+// their centres (the contact normal) they go from crossing towards parallel, and past 14.5° the
+// one contact point becomes a saddle with a minimum either side (the pitchfork of the soak).
+inline constexpr const char* kHooksScene = R"JSON({
+  "name": "two hooks",
+  "length_unit": "mm",
+  "bodies": [
+    {"name": "fixed_ring", "fixed": true},
+    {"name": "ring", "position": [1.5, 0, 0], "mass": 0.001, "inertia": [2e-10, 2e-10, 2e-10]}
+  ],
+  "surfaces": [
+    {"name": "fixed_wire", "body": "fixed_ring", "type": "torus", "major": 1.2, "minor": 0.45},
+    {"name": "wire", "body": "ring", "type": "torus", "major": 1.2, "minor": 0.45,
+     "quaternion": [0.7071067811865476, 0.7071067811865476, 0, 0]}
+  ],
+  "contacts": [{"a": "fixed_wire", "b": "wire", "kind": "unilateral", "max_contacts": 3}],
+  "grasp": {"body": "ring", "point": [0, 0, 0], "hold_orientation": 0.01,
+            "rotational_stiffness": 0.02},
+  "device": {"id": 1, "scale": 1.0, "stiffness": 300, "damping": 1.0, "max_force": 3.3,
+             "max_force_rate": 500, "ramp_time": 1.0},
+  "offset": {"tolerance": 0.02, "margin": 0.25}
+})JSON";
+
 }  // namespace tangent::testing

@@ -1,0 +1,89 @@
+// Issue 33's fourth canonical case, two hooks turning from crossing towards parallel, offline and
+// deterministic (docs/reliability.md, "Soak"): the paperclip soak's failure in seconds instead of
+// minutes. Two wire rings hooked through each other (testing/conformal_scenes.h, kHooksScene);
+// the hand (6-DOF) pulls the free ring 2 mm away from 1 s, then from 3 s turns it about the line
+// between the rings' centres (their contact normal), ±40° over 8 s. At 14.5° the one contact
+// point becomes a saddle with a minimum either side (the pitchfork). Prints every quarter second
+// and when the rings come apart (the hand's pull below 0.02 N, the ring more than 1 mm from
+// where the other holds it); exit status 1 when they do.
+//
+//   ./build/bench/hooks_turn [--seconds 11] [--lines] [--reach]
+//                            (ServoOptions::line_contacts, step_reach)
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <numbers>
+
+#include <Eigen/Geometry>
+
+#include "server/global_link.h"
+#include "server/scene.h"
+#include "server/servo.h"
+#include "testing/conformal_scenes.h"
+#include "testing/drag_path.h"
+
+using namespace tangent::server;
+
+int main(int argc, char** argv) {
+  double seconds = 11.0;
+  ServoOptions options;
+  options.dof = 6;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--seconds") && i + 1 < argc) seconds = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
+    if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
+  }
+  const auto scene = ParseScene(tangent::testing::kHooksScene, "hooks");
+  ServoLoop servo(*scene, options);
+  GlobalLink link(servo);
+  TickResult r;
+  Snapshot snap;
+  const int ring = scene->BodyIndex("ring");
+  int64_t now = 1'000'000'000;
+  double worst = 0.0, largest_step = 0.0;
+  Eigen::Vector3d last = Eigen::Vector3d::Zero();
+  std::printf("hooks_turn: %.0f s, line contacts %s, step reach %s\n", seconds,
+              options.line_contacts ? "on" : "off", options.step_reach ? "on" : "off");
+  for (int step = 1; step <= static_cast<int>(seconds * 1000); ++step) {
+    const double t = 1e-3 * step;
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    if (t > 1.0) p.x() = 2e-3 * std::min(1.0, t - 1.0);
+    const double angle =
+        t > 3.0 ? (40 * std::numbers::pi / 180) * std::sin(std::numbers::pi * (t - 3.0) / 4.0)
+                : 0.0;
+    const Eigen::Quaterniond q(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX()));
+    const DeviceSample s = tangent::bench::HandSample(step, now, p, q);
+    for (int tick = 0; tick < 4; ++tick) {
+      servo.Tick(&s, now, &r);
+      now += 250'000;
+      worst = std::max(worst, r.violation);
+    }
+    servo.FillSnapshot(&snap);
+    link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
+    servo.AdoptClearances(link.clearances());
+    const Eigen::Vector3d f(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
+    largest_step = std::max(largest_step, (f - last).norm());
+    last = f;
+    const double x = snap.q[ring][0];
+    const double turn =
+        2 * std::acos(std::min(1.0, std::abs(snap.q[ring][3]))) * 180 / std::numbers::pi;
+    if (step % 250 == 0) {
+      std::printf(
+          "  %5.2f s  hand turn %6.1f deg  ring turn %5.1f deg  ring x %.4f mm  F_x %7.4f N"
+          "  contacts %d\n",
+          t, angle * 180 / std::numbers::pi, turn, x * 1e3, f.x(), snap.num_contacts);
+    }
+    if (t > 2.0 && (std::abs(f.x()) < 0.02 || x > 2.5e-3)) {
+      std::printf(
+          "apart at %.3f s (hand turn %.1f deg, ring turn %.1f deg); worst violation "
+          "%.1e m, largest force step %.4f N\n",
+          t, angle * 180 / std::numbers::pi, turn, worst, largest_step);
+      return 1;
+    }
+  }
+  std::printf("held for %.1f s; worst violation %.1e m, largest force step %.4f N\n", seconds,
+              worst, largest_step);
+  return 0;
+}
