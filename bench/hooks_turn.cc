@@ -9,6 +9,7 @@
 //
 //   ./build/bench/hooks_turn [--seconds 11] [--lines] [--reach]
 //                            (ServoOptions::line_contacts, step_reach)
+//                            [--trace-from T] (every 10th device step's contacts and sections)
 
 #include <cmath>
 #include <cstdio>
@@ -27,11 +28,12 @@
 using namespace tangent::server;
 
 int main(int argc, char** argv) {
-  double seconds = 11.0;
+  double seconds = 11.0, trace_from = 1e9;
   ServoOptions options;
   options.dof = 6;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seconds") && i + 1 < argc) seconds = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--trace-from") && i + 1 < argc) trace_from = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
     if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
   }
@@ -69,6 +71,25 @@ int main(int argc, char** argv) {
     const double x = snap.q[ring][0];
     const double turn =
         2 * std::acos(std::min(1.0, std::abs(snap.q[ring][3]))) * 180 / std::numbers::pi;
+    if (t >= trace_from && step % 10 == 0) {
+      std::printf("    %.3f s  turn %.2f deg  x %.5f mm  violation %.1e  iterations %d  F_x %.4f N |", t,
+                  turn, x * 1e3, r.violation, r.iterations, f.x());
+      for (int c = 0; c < snap.num_contacts; ++c) {
+        const TrackedContact& k = snap.contacts[c];
+        std::printf(" [u %.4f %.4f %.4f %.4f  beta %.1e  %.3f N]", k.u[0], k.u[1], k.u[2], k.u[3],
+                    k.beta, k.force);
+      }
+      const LineContacts& lines = servo.lines();
+      if (lines.pairs() > 0 && lines.line(0)) {
+        const Eigen::Vector3d load = servo.LineLoads(0);
+        std::printf("  sections:");
+        for (int i = 0; i < LineContacts::kSections; ++i) {
+          std::printf(" %.4f (beta %.1e, %.3f N)", lines.section(0, i).value,
+                      lines.section(0, i).ext.beta, load[i]);
+        }
+      }
+      std::printf("\n");
+    }
     if (step % 250 == 0) {
       std::printf(
           "  %5.2f s  hand turn %6.1f deg  ring turn %5.1f deg  ring x %.4f mm  F_x %7.4f N"
