@@ -5,6 +5,23 @@
 
 namespace tangent::optimizer {
 
+namespace {
+
+// x(k0:k1) · y(k0:k1) in two interleaved partial sums: the multiply–adds of one sum wait on each
+// other's latency, two chains overlap.
+inline double Dot(const double* x, const double* y, Eigen::Index k0, Eigen::Index k1) {
+  double d0 = 0.0, d1 = 0.0;
+  Eigen::Index k = k0;
+  for (; k + 1 < k1; k += 2) {
+    d0 += x[k] * y[k];
+    d1 += x[k + 1] * y[k + 1];
+  }
+  if (k < k1) d0 += x[k] * y[k];
+  return d0 + d1;
+}
+
+}  // namespace
+
 bool DenseCholesky::Compute(const Eigen::MatrixXd& A) {
   const Eigen::Index n = A.rows();
   if (U_.rows() != n || U_.cols() != n) Reserve(static_cast<int>(n));  // (done on the servo)
@@ -25,18 +42,16 @@ bool DenseCholesky::Compute(const Eigen::MatrixXd& A) {
     first_[static_cast<size_t>(j)] = start;
     double sq = 0.0;
     for (Eigen::Index i = start; i < j; ++i) {
-      const double* ui = U + i * n;
-      double dot = 0.0;
-      for (Eigen::Index k = std::max(start, first_[static_cast<size_t>(i)]); k < i; ++k) {
-        dot += ui[k] * uj[k];
-      }
-      const double v = (aj[i] - dot) / ui[i];
+      const double v =
+          (aj[i] - Dot(U + i * n, uj, std::max(start, first_[static_cast<size_t>(i)]), i)) *
+          inverse_diagonal_[static_cast<size_t>(i)];
       uj[i] = v;
       sq += v * v;
     }
     const double pivot = aj[j] - sq;
     if (!(pivot > 0.0)) return false;  // (NaN too)
     uj[j] = std::sqrt(pivot);
+    inverse_diagonal_[static_cast<size_t>(j)] = 1.0 / uj[j];
   }
   return true;
 }
@@ -47,15 +62,13 @@ void DenseCholesky::SolveInPlace(Eigen::VectorXd* x_io) const {
   double* x = x_io->data();
   // Uᵀ y = x: y_j = (x_j − U(0:j, j)·y(0:j)) / U(j, j).
   for (Eigen::Index j = 0; j < n; ++j) {
-    const double* uj = U + j * n;
-    double dot = 0.0;
-    for (Eigen::Index k = first_[static_cast<size_t>(j)]; k < j; ++k) dot += uj[k] * x[k];
-    x[j] = (x[j] - dot) / uj[j];
+    x[j] = (x[j] - Dot(U + j * n, x, first_[static_cast<size_t>(j)], j)) *
+           inverse_diagonal_[static_cast<size_t>(j)];
   }
   // U x = y, by columns: x_j = y_j / U(j, j), then y(0:j) −= x_j U(0:j, j).
   for (Eigen::Index j = n - 1; j >= 0; --j) {
     const double* uj = U + j * n;
-    x[j] /= uj[j];
+    x[j] *= inverse_diagonal_[static_cast<size_t>(j)];
     const double xj = x[j];
     for (Eigen::Index k = first_[static_cast<size_t>(j)]; k < j; ++k) x[k] -= xj * uj[k];
   }

@@ -20,6 +20,7 @@ class DenseCholesky {
   void Reserve(int n) {
     U_.resize(n, n);
     first_.resize(static_cast<size_t>(n));
+    inverse_diagonal_.resize(static_cast<size_t>(n));
   }
   /// Factorizes A's upper triangle (A n x n, n as reserved). False, leaving the factor
   /// unusable, when A is not numerically positive definite: a pivot not > 0 (or NaN).
@@ -32,6 +33,9 @@ class DenseCholesky {
  private:
   Eigen::MatrixXd U_;
   std::vector<Eigen::Index> first_;  ///< per column, its first nonzero row (the envelope)
+  /// 1 / U(j, j): the factorization and the solves multiply by it instead of dividing (a
+  /// division is ~4x a multiply's latency on the chain each column waits on).
+  std::vector<double> inverse_diagonal_;
 };
 
 }  // namespace tangent::optimizer
