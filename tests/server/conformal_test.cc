@@ -251,13 +251,15 @@ struct BoxOutcome {
   /// At the tilts' peaks (6 s and 8 s: the hand still), F_z and the box's turn (rad).
   double peak_force[2] = {0.0, 0.0}, peak_tilt[2] = {0.0, 0.0};
   double max_force_step = 0.0;
-  long allocations = 0;  ///< in the servo's ticks from 3.5 s
-  int held_steps = 0;    ///< device steps with the face pair held
+  long allocations = 0;     ///< in the servo's ticks from 3.5 s
+  int held_steps = 0;       ///< device steps with the face pair held
+  bool held_at_end = true;  ///< the face pair still held at the last step (lifted off: released)
+  double end_force = 1.0;   ///< |F| at the last step
 };
 
 // 1 kHz device states, four servo ticks each, a global pass per device step. From 1 s the hand
 // presses 2 mm down; from 3 s it pushes the box ±5 mm along x; from 5 s, still pressing, it
-// tilts it about x, 12° each way (peaks at 6 s and 8 s).
+// tilts it about x, 12° each way (peaks at 6 s and 8 s); from 9 s it lifts it 3 mm off.
 BoxOutcome DriveBox(bool faces, double seconds) {
   auto scene = ParseScene(testing::kBoxScene, "box.json");
   ServoOptions options;
@@ -278,7 +280,9 @@ BoxOutcome DriveBox(bool faces, double seconds) {
     Eigen::Vector3d p = Eigen::Vector3d::Zero();
     if (t > 1.0) p.z() = -2e-3 * std::min(1.0, t - 1.0);
     if (t > 3.0 && t <= 5.0) p.x() = 5e-3 * std::sin(std::numbers::pi * (t - 3.0));
-    const double angle = t > 5.0 ? tilt * std::sin(std::numbers::pi * (t - 5.0) / 2.0) : 0.0;
+    if (t > 9.0) p.z() = -2e-3 + 5e-3 * std::min(1.0, t - 9.0);  // lifted 3 mm off the floor
+    const double angle =
+        t > 5.0 && t <= 9.0 ? tilt * std::sin(std::numbers::pi * (t - 5.0) / 2.0) : 0.0;
     const Eigen::Quaterniond q(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX()));
     const DeviceSample s = bench::HandSample(step, now, p, q);
     const long before = testing::AllocationCount();
@@ -293,6 +297,7 @@ BoxOutcome DriveBox(bool faces, double seconds) {
     servo.AdoptClearances(link.clearances());
     const bool held = servo.faces().pairs() > 0 && servo.faces().held(0);
     out.held_steps += held;
+    out.held_at_end = held;
     const Eigen::Vector3d f(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
     out.max_force_step = std::max(out.max_force_step, (f - last_force).norm());
     last_force = f;
@@ -349,6 +354,7 @@ BoxOutcome DriveBox(bool faces, double seconds) {
     }
   }
   if (pressed > 0) out.press_force /= pressed;
+  out.end_force = last_force.norm();
   std::printf(
       "%s: worst violation %.1e m, lowest corner %.2e m, pressing %.4f N (corners %.4f %.4f %.4f "
       "%.4f N), pushed %.4f to %.4f N, tilted %.1f deg, |F_z - corner loads| %.1e N, raised "
@@ -380,7 +386,7 @@ std::pair<double, double> TiltedStatics(double k, double k_r, double theta_t, do
 }
 
 TEST(ConformalTest, ABoxOnAFloorIsHeldByItsFacesCornersPressedPushedAndTilted) {
-  const BoxOutcome run = DriveBox(true, 8.0);
+  const BoxOutcome run = DriveBox(true, 10.5);
   const double k = 300.0, gap = 0.05e-3;
   EXPECT_LE(run.worst_violation, 1e-6);
   EXPECT_GE(run.lowest_corner, -1e-6);  // no corner through the floor
@@ -400,6 +406,8 @@ TEST(ConformalTest, ABoxOnAFloorIsHeldByItsFacesCornersPressedPushedAndTilted) {
   EXPECT_LT(run.raised_load, 1e-6);    // standing on one edge: the other carries nothing
   EXPECT_LE(run.max_force_step, 0.5);  // the rate limit: 500 N/s over a 1 ms device step
   EXPECT_EQ(run.allocations, 0);
+  EXPECT_FALSE(run.held_at_end);   // lifted off: released
+  EXPECT_LT(run.end_force, 1e-3);  // and nothing felt
 }
 
 TEST(ConformalTest, WithoutFaceContactsTheFloorDoesNotHoldTheBox) {
