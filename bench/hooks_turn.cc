@@ -72,8 +72,9 @@ int main(int argc, char** argv) {
     const double turn =
         2 * std::acos(std::min(1.0, std::abs(snap.q[ring][3]))) * 180 / std::numbers::pi;
     if (t >= trace_from && step % 10 == 0) {
-      std::printf("    %.3f s  turn %.2f deg  x %.5f mm  violation %.1e  iterations %d  F_x %.4f N |", t,
-                  turn, x * 1e3, r.violation, r.iterations, f.x());
+      std::printf(
+          "    %.3f s  turn %.2f deg  x %.5f mm  violation %.1e  iterations %d  F_x %.4f N |", t,
+          turn, x * 1e3, r.violation, r.iterations, f.x());
       for (int c = 0; c < snap.num_contacts; ++c) {
         const TrackedContact& k = snap.contacts[c];
         std::printf(" [u %.4f %.4f %.4f %.4f  beta %.1e  %.3f N]", k.u[0], k.u[1], k.u[2], k.u[3],
