@@ -76,7 +76,8 @@ void FaceContacts::Contact(int k, int i, Eigen::Vector4d* u, Eigen::Vector3d* p_
                            Eigen::Vector3d* p_g) const {
   const Pair& p = pairs_[static_cast<size_t>(k)];
   const optimizer::CornerContactTerm::State& s = *p.state[i];
-  // The corner's own point: where its closest point lies, less the distance along the normal.
+  // The corner itself: its closest point on the other face moved out by its distance along that
+  // face's normal.
   const Eigen::Vector3d on_other = s.point.ext.p_f;
   const Eigen::Vector3d corner = on_other + s.point.ext.distance * s.point.ext.R_WCf.col(2);
   if (i < 4) {
