@@ -104,8 +104,7 @@ int main(int argc, char** argv) {
       std::printf("\n");
     }
     if (k % 4 == 3) {
-      link.Pass(snap, [&](const ContactEventMsg& m) {
-        const bool ok = servo.Apply(m);
+      link.PassInto(&servo, snap, [&](const ContactEventMsg& m, bool ok) {
         events += ok;
         if (trace) {
           std::printf("  event %s %d-%d u %.4f %.4f %.4f %.4f%s\n", m.added ? "add" : "remove",
@@ -113,7 +112,6 @@ int main(int argc, char** argv) {
                       ok ? "" : " (not applied)");
         }
       });
-      servo.AdoptClearances(link.clearances());
     }
     quiet = t > 10.0 && f.norm() < 0.02 ? quiet + 1 : 0;
     if (!apart && quiet > 5000) {

@@ -102,8 +102,7 @@ Row Measure(int moving, int steps, bool four_bar = false) {
     }
     const auto t0 = std::chrono::steady_clock::now();
     servo.FillSnapshot(&snap);
-    link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
-    servo.AdoptClearances(link.clearances());
+    link.PassInto(&servo, snap);
     passes.push_back(
         std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
   }

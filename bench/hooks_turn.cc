@@ -63,8 +63,7 @@ int main(int argc, char** argv) {
       worst = std::max(worst, r.violation);
     }
     servo.FillSnapshot(&snap);
-    link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
-    servo.AdoptClearances(link.clearances());
+    link.PassInto(&servo, snap);
     const Eigen::Vector3d f(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
     largest_step = std::max(largest_step, (f - last).norm());
     last = f;

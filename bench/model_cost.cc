@@ -51,8 +51,7 @@ struct Run {
     }
     const auto t0 = std::chrono::steady_clock::now();
     servo->FillSnapshot(&snap);
-    link->Pass(snap, [&](const ContactEventMsg& m) { servo->Apply(m); });
-    servo->AdoptClearances(link->clearances());
+    link->PassInto(servo.get(), snap);
     pass_us.push_back(
         std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
   }

@@ -71,8 +71,7 @@ struct Run {
     }
     if (!pass) return;
     servo->FillSnapshot(&snap);
-    link->Pass(snap, [&](const ContactEventMsg& m) { servo->Apply(m); });
-    servo->AdoptClearances(link->clearances());
+    link->PassInto(servo.get(), snap);
   }
 };
 

@@ -174,8 +174,7 @@ Trace Simulate(const Scene& scene, const Hand& hand, const Setting& s, double se
       ++pass_index;
       servo.FillSnapshot(&snap);
       tr.contacts.emplace_back(snap.contacts, snap.contacts + snap.num_contacts);
-      link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
-      servo.AdoptClearances(link.clearances());
+      link.PassInto(&servo, snap);
     }
   }
   return tr;

@@ -34,6 +34,20 @@ class GlobalLink {
     Certify(snapshot);
     return static_cast<int>(events_.size());
   }
+  /// One pass on `snapshot` (the servo's own) applied to `servo` in this thread, as the tests and
+  /// benchmarks drive it: each event (observe(msg, applied) sees it), then the certificate
+  /// (ServoLoop::AdoptClearances), which a servo left without moves no farther from the first
+  /// pass's poses than that certificate allows. The engine hands both across threads instead
+  /// (server/engine.cc). @return the number of events.
+  template <class Observe>
+  int PassInto(ServoLoop* servo, const Snapshot& snapshot, Observe&& observe) {
+    const int n = Pass(snapshot, [&](const ContactEventMsg& m) { observe(m, servo->Apply(m)); });
+    servo->AdoptClearances(clearances_);
+    return n;
+  }
+  int PassInto(ServoLoop* servo, const Snapshot& snapshot) {
+    return PassInto(servo, snapshot, [](const ContactEventMsg&, bool) {});
+  }
   /// The last pass's certificate (for ServoLoop::AdoptClearances).
   const ClearanceMsg& clearances() const { return clearances_; }
 

@@ -387,8 +387,7 @@ StabilityRow RunServo(const ServoSpec& c) {
     }
     if (i % 16 == 15) {
       servo.FillSnapshot(&snap);
-      link.Pass(snap, [&](const server::ContactEventMsg& m) { servo.Apply(m); });
-      servo.AdoptClearances(link.clearances());
+      link.PassInto(&servo, snap);
     }
   }
   row.iterations = static_cast<double>(iterations) / std::max(1, ticks);

@@ -65,8 +65,7 @@ Outcome Drive(bool lines, double seconds) {
     }
     if (sliding) out.slide_allocations += testing::AllocationCount() - before;
     servo.FillSnapshot(&snap);
-    link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
-    servo.AdoptClearances(link.clearances());
+    link.PassInto(&servo, snap);
     const double fz = r.wrench.force[2];
     if (t > 2.0 && t <= 3.0) {
       out.press_force += fz;
@@ -178,8 +177,7 @@ SocketOutcome DriveSocket() {
     servo.FillSnapshot(&snap);
     // A pass every 4 ms (the nested parts' offsets overlap everywhere: 1.5 ms a pass).
     if (step % 4 == 0) {
-      link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
-      servo.AdoptClearances(link.clearances());
+      link.PassInto(&servo, snap);
     }
     const Eigen::Vector3d f(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
     out.max_force_step = std::max(out.max_force_step, (f - last_force).norm());
@@ -293,8 +291,7 @@ BoxOutcome DriveBox(bool faces, double seconds) {
     }
     if (t > 3.5) out.allocations += testing::AllocationCount() - before;
     servo.FillSnapshot(&snap);
-    link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
-    servo.AdoptClearances(link.clearances());
+    link.PassInto(&servo, snap);
     const bool held = servo.faces().pairs() > 0 && servo.faces().held(0);
     out.held_steps += held;
     out.held_at_end = held;

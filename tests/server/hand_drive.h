@@ -80,8 +80,8 @@ inline HandDrive DriveAlongPath(const Scene& scene, const std::string& csv, int 
     each(snap);
     if (k % 4 == 3) {
       const auto t0 = std::chrono::steady_clock::now();
-      link.Pass(snap, [&](const ContactEventMsg& m) { run.events += servo.Apply(m); });
-      servo.AdoptClearances(link.clearances());
+      link.PassInto(&servo, snap,
+                    [&](const ContactEventMsg&, bool applied) { run.events += applied; });
       run.pass_seconds += seconds(t0);
     }
   }

@@ -167,8 +167,7 @@ TEST(ServoTest, ThePaperclipChainPulledFromRestHolds) {
       }
       if (k % 4 == 3) {
         servo.FillSnapshot(&snap);
-        link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
-        servo.AdoptClearances(link.clearances());
+        link.PassInto(&servo, snap);
       }
     }
     // 0.5 s into the 1 s ramp, a chain that holds pulls back with about half of k × 4 mm.
@@ -358,11 +357,9 @@ TEST(ServoTest, IdlePartsAreNotModelled) {
       for (int i = 0; i < 3; ++i) differences += ra.wrench.force[i] != rb.wrench.force[i];
     }
     a.FillSnapshot(&snap);
-    link_a.Pass(snap, [&](const ContactEventMsg& m) { events += a.Apply(m); });
-    a.AdoptClearances(link_a.clearances());
+    link_a.PassInto(&a, snap, [&](const ContactEventMsg&, bool applied) { events += applied; });
     b.FillSnapshot(&snap);
-    link_b.Pass(snap, [&](const ContactEventMsg& m) { b.Apply(m); });
-    b.AdoptClearances(link_b.clearances());
+    link_b.PassInto(&b, snap);
   }
   EXPECT_EQ(differences, 0);
   EXPECT_GT(events, 0);  // the drag made and broke contacts on the way

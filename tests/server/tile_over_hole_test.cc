@@ -117,12 +117,7 @@ TEST(TileOverHoleTest, TheGlobalStageFindsTheEdgesContactFromAColdStart) {
   TickResult r;
   servo.Tick(nullptr, 1'000'000'000, &r);
   servo.FillSnapshot(&snap);
-  int events = 0;
-  link.Pass(snap, [&](const ContactEventMsg& m) {
-    servo.Apply(m);
-    ++events;
-  });
-  servo.AdoptClearances(link.clearances());
+  const int events = link.PassInto(&servo, snap);
   servo.Tick(nullptr, 1'000'250'000, &r);
   servo.FillSnapshot(&snap);
   std::printf("cold start: %d held, %d event(s) in the next pass:", snap.num_contacts, events);

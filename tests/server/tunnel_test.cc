@@ -92,8 +92,7 @@ Outcome Drive(bool guard) {
     }
     if (k % 100 == 0) {
       servo.FillSnapshot(&snap);
-      link.Pass(snap, [&](const ContactEventMsg& m) { servo.Apply(m); });
-      servo.AdoptClearances(link.clearances());
+      link.PassInto(&servo, snap);
     }
   }
   servo.FillSnapshot(&snap);
