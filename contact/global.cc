@@ -41,88 +41,15 @@ const char* ToString(ContactEvent::Reason r) {
 
 namespace {
 
-using internal::AddFound;
+using internal::HeldOnMaterialBorder;
+using internal::IsNearMiss;
+using internal::MeasureOnMaterial;
 using internal::MinimaBeside;
-using internal::SamePoints;
-using internal::WorldBox;
-
+using internal::OnMaterial;
 using internal::Place;
-
+using internal::SamePoints;
 using internal::Watched;
-
-using internal::Seed;
-
-// Parameters of world point x on offset triangle t of a watched surface: barycentric
-// coordinates of x projected on the triangle (clamped inside), applied to the vertices' (u, v).
-Eigen::Vector2d ParametersAt(const Watched& w, const BodyPose& pose, int t,
-                             const Eigen::Vector3d& x) {
-  const auto& tri = w.s.mesh->base.triangles[static_cast<size_t>(t)];
-  const Eigen::Vector3d a = pose.Point(w.s.mesh->vertices[static_cast<size_t>(tri[0])]);
-  const Eigen::Vector3d b = pose.Point(w.s.mesh->vertices[static_cast<size_t>(tri[1])]);
-  const Eigen::Vector3d c = pose.Point(w.s.mesh->vertices[static_cast<size_t>(tri[2])]);
-  const Eigen::Vector3d e0 = b - a, e1 = c - a, d = x - a;
-  const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1);
-  const double d20 = d.dot(e0), d21 = d.dot(e1);
-  const double den = d00 * d11 - d01 * d01;
-  double l1 = 1.0 / 3, l2 = 1.0 / 3;
-  if (den > 0.0) {
-    l1 = std::clamp((d11 * d20 - d01 * d21) / den, 0.0, 1.0);
-    l2 = std::clamp((d00 * d21 - d01 * d20) / den, 0.0, 1.0);
-    if (l1 + l2 > 1.0) {
-      const double s = l1 + l2;
-      l1 /= s;
-      l2 /= s;
-    }
-  }
-  const auto& uv = w.s.mesh->base.uv;
-  return (1.0 - l1 - l2) * uv[static_cast<size_t>(tri[0])] + l1 * uv[static_cast<size_t>(tri[1])] +
-         l2 * uv[static_cast<size_t>(tri[2])];
-}
-
-// Domain bounds and periodicity of a pair's four parameters.
-using Box = internal::PairBox;
-
-void AddToCluster(const Eigen::Vector4d& u, const Box& box, Seed* c) {
-  for (int i = 0; i < 4; ++i) {
-    if (box.periodic[static_cast<size_t>(i)]) {
-      const double angle = 2.0 * M_PI * (u[i] - box.lo[i]) / (box.hi[i] - box.lo[i]);
-      c->sum_cos[i] += std::cos(angle);
-      c->sum_sin[i] += std::sin(angle);
-    } else {
-      c->sum[i] += u[i];
-    }
-  }
-  c->count = std::max(c->count, 0) + 1;
-  if ((c->count == 2 || c->count == 8 || c->count == 32 || c->count == 128) && c->n_members < 4) {
-    c->members[static_cast<size_t>(c->n_members++)] = u;
-  }
-}
-
-Eigen::Vector4d ClusterMean(const Seed& c, const Box& box) {
-  if (c.count <= 0) return c.u;
-  Eigen::Vector4d m;
-  for (int i = 0; i < 4; ++i) {
-    if (box.periodic[static_cast<size_t>(i)]) {
-      double angle = std::atan2(c.sum_sin[i], c.sum_cos[i]);
-      if (angle < 0) angle += 2.0 * M_PI;
-      m[i] = box.lo[i] + (box.hi[i] - box.lo[i]) * angle / (2.0 * M_PI);
-    } else {
-      m[i] = c.sum[i] / c.count;
-    }
-  }
-  return m;
-}
-
-Eigen::Vector3d Centroid(const Watched& w, const BodyPose& pose, int t) {
-  const auto& tri = w.s.mesh->base.triangles[static_cast<size_t>(t)];
-  Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (int k : tri) c += w.s.mesh->vertices[static_cast<size_t>(k)];
-  return pose.Point(c / 3.0);
-}
-
-}  // namespace
-
-namespace {
+using internal::WorldBox;
 
 bool BroadPhaseCallback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* data) {
   auto* impl = static_cast<GlobalContactStage::Impl*>(data);
@@ -387,241 +314,17 @@ void GlobalContactStage::BroadPhase(const std::vector<BodyPose>& poses, GlobalSt
 
 namespace {
 
-// Narrow phase on the chunk pairs candidates[first, last) of surfaces a, b whose boxes overlap:
-// the intersecting offset triangles (primitive pairs only, enable_contact = false: seeds are
-// placed from the triangles) into m.triangle_pairs. A chunk pair lying, on both surfaces,
-// within far_factor·ρ along the surface of a tracked contact is skipped: every seed it could
-// give would fall in that contact's sphere of neglect.
-void NarrowPhase(GlobalContactStage::Impl& m, const GlobalOptions& options, int a, int b,
-                 size_t first, size_t last, const BodyPose& pa, const BodyPose& pb,
-                 const std::vector<GlobalContact>& tracked, GlobalStats* st) {
-  const double far = options.far_factor * options.neglect_radius;
-  const Watched& wa = m.watched[static_cast<size_t>(a)];
-  const Watched& wb = m.watched[static_cast<size_t>(b)];
-  m.triangle_pairs.clear();
-  for (size_t k = first; k < last; ++k) {
-    const Chunk& ca = wa.chunks[static_cast<size_t>(m.candidates[k][2])];
-    const Chunk& cb = wb.chunks[static_cast<size_t>(m.candidates[k][3])];
-    bool skip = false;
-    for (const GlobalContact& c : tracked) {
-      if (c.a == a && c.b == b && wa.FarthestAlong(c.u.head<2>(), ca) <= far &&
-          wb.FarthestAlong(c.u.tail<2>(), cb) <= far) {
-        skip = true;
-        break;
-      }
-    }
-    if (skip) {
-      ++st->chunk_pairs_skipped;
-      continue;
-    }
-    ++st->chunk_pairs_tested;
-    fcl::CollisionObjectd* oa = ca.Object();
-    fcl::CollisionObjectd* ob = cb.Object();
-    oa->setTransform(pa.R_WB, pa.q.head<3>());
-    ob->setTransform(pb.R_WB, pb.q.head<3>());
-    fcl::CollisionRequestd request(static_cast<size_t>(options.max_triangle_pairs), false);
-    fcl::CollisionResultd result;
-    fcl::collide(oa, ob, request, result);
-    for (size_t r = 0; r < result.numContacts(); ++r) {
-      const fcl::Contactd& c = result.getContact(r);
-      const bool swapped = c.o1 != oa->collisionGeometry().get();
-      m.triangle_pairs.emplace_back(ca.triangles[static_cast<size_t>(swapped ? c.b2 : c.b1)],
-                                    cb.triangles[static_cast<size_t>(swapped ? c.b1 : c.b2)]);
-    }
-  }
-  st->triangle_pairs += static_cast<int>(m.triangle_pairs.size());
-}
-
-// Seeds from m.triangle_pairs, clustered by spheres of neglect into m.accepted: the pair's
-// tracked contacts first (where they are now, as neglect centres; returns how many), then one
-// cluster per seed not within ρ (and topologically near on both surfaces) of an earlier one.
-size_t ClusterSeeds(GlobalContactStage::Impl& m, const GlobalOptions& options, int a, int b,
-                    const BodyPose& pa, const BodyPose& pb,
-                    const std::vector<GlobalContact>& tracked, const Box& domains,
-                    GlobalStats* st) {
-  const double rho = options.neglect_radius, far = options.far_factor * rho;
-  const Watched& wa = m.watched[static_cast<size_t>(a)];
-  const Watched& wb = m.watched[static_cast<size_t>(b)];
-  std::vector<Seed>& accepted = m.accepted;
-  accepted.clear();
-  for (const GlobalContact& c : tracked) {
-    if (c.a != a || c.b != b) continue;
-    const Eigen::Vector3d xa = pa.Point(wa.s.surface->Evaluate(c.u[0], c.u[1], 0).S);
-    const Eigen::Vector3d xb = pb.Point(wb.s.surface->Evaluate(c.u[2], c.u[3], 0).S);
-    Seed t;
-    t.u = c.u;
-    t.x = 0.5 * (xa + xb);
-    accepted.push_back(t);
-  }
-  const size_t n_tracked = accepted.size();
-  for (const auto& [ta, tb] : m.triangle_pairs) {
-    // Where the triangles meet: the midpoint of their centroids, projected on each. (FCL's
-    // contact positions, with enable_contact, measured centimetres off for mesh pairs in 0.7
-    // and cost a triangle–triangle intersection each.)
-    Seed s;
-    s.x = 0.5 * (Centroid(wa, pa, ta) + Centroid(wb, pb, tb));
-    s.u << ParametersAt(wa, pa, ta, s.x), ParametersAt(wb, pb, tb, s.x);
-    // Spheres of neglect, unless topologically far on either surface.
-    Seed* owner = nullptr;
-    for (size_t k = 0; k < accepted.size(); ++k) {
-      const Seed& o = accepted[k];
-      if ((o.x - s.x).norm() < rho && wa.Along(o.u.head<2>(), s.u.head<2>()) <= far &&
-          wb.Along(o.u.tail<2>(), s.u.tail<2>()) <= far) {
-        owner = k >= n_tracked ? &accepted[k] : nullptr;
-        ++st->seeds_neglected;
-        s.count = -1;  // neglected
-        break;
-      }
-    }
-    if (s.count < 0 && !owner) continue;
-    Seed& cluster = owner ? *owner : (accepted.push_back(s), accepted.back());
-    AddToCluster(s.u, domains, &cluster);
-  }
-  return n_tracked;
-}
-
 // A tracked contact is held to the servo's tracking residual (the contact equations' scaled
 // residual, optimizer::SurfaceContactTerm::kTrackedResidual); 1e-9 accepts what a snapshot
 // carries and stops short of a point one Newton step would move by more than ~1e-18.
 constexpr double kTrackedResidual = 1e-9;
 
-// What a face extremum e of surfaces a, b stands for when either is trimmed: itself while its
-// points lie on both materials, else the edge contact of the surface it leaves, or with both
-// trimmed the two edges' (contact/trimmed.h), with its distance and points in (a, b) order.
-struct OnMaterial {
-  bool on_edge = false;
-  /// Where the points lie (PointParameters): with both surfaces trimmed, what the contact is
-  /// tracked by; else the face extremum's parameters.
-  Eigen::Vector4d u = Eigen::Vector4d::Zero();
-  double beta = 0.0;
-  Eigen::Vector3d p_a = Eigen::Vector3d::Zero(), p_b = Eigen::Vector3d::Zero();
-  ExtremalStatus status = ExtremalStatus::kNotConverged;
-};
-OnMaterial MeasureOnMaterial(const Watched& wa, const BodyPose& pa, const Watched& wb,
-                             const BodyPose& pb, const SurfaceSurfaceExtremum& e) {
-  if (wa.edges && wb.edges) {
-    const TrimmedMeasure t = MeasureTrimmedPair(*wa.edges, pa, *wb.s.surface, wb.edges.get(), pb,
-                                                &e, nullptr, nullptr, nullptr);
-    return {t.on_edge, PointParameters(*wa.edges, *wb.edges, t, e.u), t.beta, t.p_f, t.p_g,
-            t.status};
-  }
-  if (wa.edges) {
-    const TrimmedMeasure t = MeasureTrimmed(*wa.edges, pa, *wb.s.surface, pb, e);
-    if (t.on_edge) return {true, e.u, t.beta, t.p_f, t.p_g, t.status};
-  }
-  if (wb.edges) {
-    SurfaceSurfaceExtremum swapped = e;
-    swapped.u << e.u.tail<2>(), e.u.head<2>();
-    const TrimmedMeasure t = MeasureTrimmed(*wb.edges, pb, *wa.s.surface, pa, swapped);
-    if (t.on_edge) return {true, e.u, t.beta, t.p_g, t.p_f, t.status};
-  }
-  return {false, e.u, e.beta, e.p_f, e.p_g, e.status};
-}
-
-// A face extremum on the material held on its surface's border (ExtremalStatus::kAtBoundary,
-// every held parameter on a trimmed surface): where a face's material reaches its surface's
-// border (an imported cylinder wall's top at a hole's rim), the border is the material's edge and
-// the held extremum its contact with the other surface, as a trim edge's is. The servo's
-// trimmed term measures it so (a face contact held on a bound, with its boundary Hessian); the
-// stage keeps and finds it alike, rather than calling it gone from the domain and finding it
-// again every pass. `on`: its MeasureOnMaterial.
-bool HeldOnMaterialBorder(const Watched& wa, const Watched& wb, const SurfaceSurfaceExtremum& e,
-                          const OnMaterial& on) {
-  if (e.status != ExtremalStatus::kAtBoundary || on.on_edge) return false;
-  for (int i = 0; i < 4; ++i) {
-    if (e.at_bound[static_cast<size_t>(i)] && !(i < 2 ? wa.edges : wb.edges)) return false;
-  }
-  return true;
-}
-
-// Refines each new cluster m.accepted[n_tracked...] by the extremal Newton solver: from the mean
-// of its seeds (the middle of where the offsets overlap, near the closest or deepest pair), then
-// from its first seed and a few other members while that fails. (Measured: from the first seed
-// alone, 2.4 % of deep contacts, whose seeds ring the overlap, converged to the far sides' pair
-// instead.) Contacts not already in *found are added to it.
-void RefineClusters(const GlobalContactStage::Impl& m, const GlobalOptions& options, int a, int b,
-                    size_t n_tracked, const BodyPose& pa, const BodyPose& pb, const Box& domains,
-                    GlobalStats* st, std::vector<GlobalContact>* found, double* nearest) {
-  const Watched& wa = m.watched[static_cast<size_t>(a)];
-  const Watched& wb = m.watched[static_cast<size_t>(b)];
-  for (size_t k = n_tracked; k < m.accepted.size(); ++k) {
-    SurfaceSurfaceExtremum e;
-    SurfacePairEval at;
-    bool ok = false;
-    const Seed& cl = m.accepted[k];
-    OnMaterial on;
-    for (int attempt = 0; attempt < 2 + cl.n_members && !ok; ++attempt) {
-      ++st->seeds_refined;
-      const Eigen::Vector4d seed = attempt == 0   ? ClusterMean(cl, domains)
-                                   : attempt == 1 ? cl.u
-                                                  : cl.members[static_cast<size_t>(attempt - 2)];
-      e = SolveSurfaceSurface(*wa.s.surface, pa, *wb.s.surface, pb, seed, kContinuation, &at);
-      // On trimmed surfaces the face's extremal point may lie off the material (over a hole,
-      // beyond a face's border): the contact is then the nearest trim edge's.
-      on = MeasureOnMaterial(wa, pa, wb, pb, e);
-      // The nearest pair measured on the material (GlobalContactStage::viewed): a converged
-      // minimum of the faces, or an edge's.
-      if (on.on_edge ? on.status == ExtremalStatus::kConverged
-                     : e.status == ExtremalStatus::kConverged && e.kind == ExtremumKind::kMinimum) {
-        *nearest = std::min(*nearest, on.on_edge ? on.beta : e.beta);
-      }
-      if (on.on_edge) {
-        ok = (e.status == ExtremalStatus::kConverged || e.status == ExtremalStatus::kAtBoundary) &&
-             on.status == ExtremalStatus::kConverged && on.beta < options.activation &&
-             on.beta > -options.max_penetration;
-      } else {
-        ok = (e.status == ExtremalStatus::kConverged || HeldOnMaterialBorder(wa, wb, e, on) ||
-              (options.accept_continuum && e.status == ExtremalStatus::kSingular)) &&
-             e.beta < options.activation && e.beta > -options.max_penetration && e.alignment < 0.0;
-      }
-      // The cluster's own minimum, apart by more than the activation distance where the offsets
-      // met (its points within ρ of there): no contact here, and the other seeds would only find
-      // it again. (The retries are for seeds that reach another region's pair, such as a deep
-      // contact's far sides, which lie below −max_penetration. Measured on twenty clips' cold
-      // pass: 380 of 2,035 clusters ended so, each retried three times.)
-      if (!ok && !on.on_edge && e.status == ExtremalStatus::kConverged &&
-          e.kind == ExtremumKind::kMinimum && e.beta >= options.activation &&
-          (0.5 * (e.p_f + e.p_g) - cl.x).norm() < options.neglect_radius) {
-        break;
-      }
-    }
-    if (!ok) continue;
-    // A saddle of the distance is not a contact: the minima beside it are. (Held on a border,
-    // the surfaces' curvature across it says nothing.)
-    if (const RelativeCurvature rc = RelativeCurvatureOf(at);
-        !on.on_edge && e.status == ExtremalStatus::kConverged && rc.crossing) {
-      MinimaBeside(*wa.s.surface, pa, *wb.s.surface, pb, e, at, rc, options, a, b, found);
-      continue;
-    }
-    AddFound({a, b, on.u, on.beta, on.p_a, on.p_b}, found);
-  }
-}
-
 }  // namespace
-
-void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
-                                      const std::vector<BodyPose>& poses,
-                                      const std::vector<GlobalContact>& tracked, GlobalStats* st) {
-  Impl& m = *impl_;
-  const Watched& wa = m.watched[static_cast<size_t>(a)];
-  const Watched& wb = m.watched[static_cast<size_t>(b)];
-  const BodyPose& pa = poses[static_cast<size_t>(wa.s.body)];
-  const BodyPose& pb = poses[static_cast<size_t>(wb.s.body)];
-  const Box domains = internal::PairBoxOf(*wa.s.surface, *wb.s.surface);
-  NarrowPhase(m, options_, a, b, first, last, pa, pb, tracked, st);
-  const size_t n_tracked = ClusterSeeds(m, options_, a, b, pa, pb, tracked, domains, st);
-  double nearest = std::numeric_limits<double>::infinity();
-  RefineClusters(m, options_, a, b, n_tracked, pa, pb, domains, st, &found_, &nearest);
-  if (!m.triangle_pairs.empty()) {
-    m.crossed.emplace_back(a, b);
-    viewed_.push_back({a, b, nearest});
-  }
-}
 
 void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
                                 const std::vector<GlobalContact>& tracked,
                                 std::vector<ContactEvent>* events) {
-  const Impl& m = *impl_;
+  Impl& m = *impl_;
   const double far = options_.far_factor * options_.neglect_radius;
   split_.clear();
   removed_.assign(tracked.size(), 0);
@@ -706,6 +409,10 @@ void GlobalContactStage::Events(const std::vector<BodyPose>& poses,
       remove(ContactEvent::Reason::kLost);
     } else if (e.beta > options_.release) {
       remove(ContactEvent::Reason::kSeparated);
+      // Still within the offsets' reach: the next pass re-solves it as a near miss.
+      if (options_.near_misses && IsNearMiss(m, options_, c.a, c.b, e)) {
+        m.next_misses.push_back({c.a, c.b, e.u});
+      }
     } else if (same_as_earlier(k, e)) {
       // Two tracked contacts on one point (the minima of a split came back together).
       remove(ContactEvent::Reason::kMerged);
@@ -745,6 +452,8 @@ void GlobalContactStage::Run(const std::vector<BodyPose>& poses,
   found_.clear();
   viewed_.clear();
   m.crossed.clear();
+  std::swap(m.misses, m.next_misses);
+  m.next_misses.clear();
   ++m.pass;
   BroadPhase(poses, &st);
   // Candidates are grouped by surface pair (a, b): one FindContacts per pair.

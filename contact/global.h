@@ -39,6 +39,12 @@ struct GlobalOptions {
   /// (FindFaces): found and kept by the corner of either face lying over the other nearest to it
   /// (contact/face_gap.h), as the servo holds them (server/face_contacts.h).
   bool face_pairs = true;
+  /// Carry near misses from pass to pass (docs/contact.md, "Near misses"): a minimum of a pair's
+  /// distance apart within its offsets' reach (a refinement's answer, or a tracked contact
+  /// removed as separated) is re-solved in the next pass and, a near miss or a contact again,
+  /// centres a sphere of neglect as a tracked contact does: its blocks skip the narrow phase.
+  /// Off: every pass finds what it finds from its seeds alone (global_bench's "cold").
+  bool near_misses = true;
   /// A contact is added when its extremal distance β falls below `activation` and removed when
   /// it rises above `release` (> activation: hysteresis), leaves the domain, or is lost. The
   /// offsets of each declared pair's two meshes must reach 2 x `release` together (a face's
@@ -97,7 +103,8 @@ const char* ToString(ContactEvent::Reason r);
 struct GlobalStats {
   int candidate_pairs = 0;      ///< surface pairs the broad phase reported (after the filter)
   int chunk_pairs_tested = 0;   ///< mesh strips whose boxes overlap, narrow phase run
-  int chunk_pairs_skipped = 0;  ///< ... skipped: near a tracked contact on both surfaces
+  int chunk_pairs_skipped = 0;  ///< ... skipped: near a tracked contact or near miss on both
+  int near_misses = 0;          ///< near misses carried from the last pass, re-solved and kept
   int triangle_pairs = 0;       ///< intersecting offset-triangle pairs (narrow phase)
   int seeds_neglected = 0;      ///< inside a sphere of neglect
   int seeds_refined = 0;        ///< Newton solves run
@@ -110,7 +117,8 @@ struct GlobalStats {
 /// contact already known; hysteresis turns distances into add/remove events. Only surface pairs
 /// the scene declares (one by one, or as the faces of two bodies) are ever tested. A pass reads a
 /// pose snapshot and the tracked contacts and writes events: the stage shares no mutable state with
-/// its caller, so it can run on its own thread. (It allocates: it is not the servo loop.)
+/// its caller, so it can run on its own thread. (It allocates: it is not the servo loop.) From one
+/// pass to the next it keeps only its near misses (GlobalOptions::near_misses).
 class GlobalContactStage {
  public:
   GlobalContactStage(std::vector<GlobalSurface> surfaces,
@@ -148,8 +156,11 @@ class GlobalContactStage {
   // The pass's steps (global.cc), in order.
   /// 1. Broad phase: surface pairs whose boxes overlap, then their overlapping block pairs.
   void BroadPhase(const std::vector<BodyPose>& poses, GlobalStats* st);
-  /// 2–4 for one surface pair: narrow phase on its block pairs (offset triangles), seeds
-  /// clustered outside the spheres of neglect, clusters refined into contacts (found_).
+  /// 2–4 for one surface pair (global_seeds.cc): its tracked contacts and the near misses the
+  /// last pass kept (re-solved) centre spheres of neglect; its block pairs, nearest first and
+  /// each unless near a centre, through the narrow phase (offset triangles); their seeds
+  /// clustered outside the spheres, each new cluster refined at once into a contact (found_) or
+  /// a near miss, either of which centres a sphere too.
   void FindContacts(int a, int b, size_t first, size_t last, const std::vector<BodyPose>& poses,
                     const std::vector<GlobalContact>& tracked, GlobalStats* st);
   /// 4b. Nested pairs: the surface pairs the broad phase reported whose offsets did not cross,

@@ -98,6 +98,30 @@ struct Seed {
   std::array<Eigen::Vector4d, 4> members{Eigen::Vector4d::Zero(), Eigen::Vector4d::Zero(),
                                          Eigen::Vector4d::Zero(), Eigen::Vector4d::Zero()};
   int n_members = 0;
+  // Refinement (global_seeds.cc): done once it reached a contact, a near miss or its own
+  // minimum apart, or ran out of seeds to try; `tried`: its count when its mean was solved from.
+  bool done = false;
+  int tried = 0;
+};
+
+// Where a surface pair's spheres of neglect are centred in a pass (global.cc): its tracked
+// contacts and its near misses re-solved (global_misses.cc), by their parameters and the
+// midpoint of their two points (world).
+struct Centre {
+  Eigen::Vector4d u;
+  Eigen::Vector3d x;
+};
+
+// A near miss of surfaces a < b (global_misses.cc): a minimum of their distance that a
+// refinement reached apart, activation ≤ β < the offsets' reach, by its parameters.
+struct NearMiss {
+  int a = -1, b = -1;
+  Eigen::Vector4d u = Eigen::Vector4d::Zero();
+};
+// A near miss re-solved in this pass's poses, with the pair's evaluation there.
+struct Revived {
+  SurfaceSurfaceExtremum e;
+  SurfacePairEval at;
 };
 
 // World box of a surface-frame box (centre c, half extents h) under pose p: exact for the box.
@@ -132,6 +156,13 @@ struct GlobalContactStage::Impl {
   std::vector<std::pair<int, int>> triangle_pairs;
   // The surface pairs whose offsets crossed this pass (FindNested skips them).
   std::vector<std::pair<int, int>> crossed;
+  // The pair's centres of neglect in FindContacts; the near misses the last pass kept, and
+  // those this pass keeps (global_misses.cc).
+  std::vector<internal::Centre> centres;
+  std::vector<internal::NearMiss> misses, next_misses;
+  std::vector<internal::Revived> revived;
+  // FindContacts' block pairs in the order it tests them: (distance², index into candidates).
+  std::vector<std::pair<double, size_t>> order;
   int n = 0, pass = 0;
   bool Allowed(int a, int b) const {
     const int ba = watched[static_cast<size_t>(a)].s.body,
@@ -148,5 +179,47 @@ struct GlobalContactStage::Impl {
                               std::make_pair(a, b));
   }
 };
+
+namespace internal {
+
+/// What a face extremum e of surfaces a, b stands for when either is trimmed: itself while its
+/// points lie on both materials, else the edge contact of the surface it leaves, or with both
+/// trimmed the two edges' (contact/trimmed.h), with its distance and points in (a, b) order.
+struct OnMaterial {
+  bool on_edge = false;
+  /// Where the points lie (PointParameters): with both surfaces trimmed, what the contact is
+  /// tracked by; else the face extremum's parameters.
+  Eigen::Vector4d u = Eigen::Vector4d::Zero();
+  double beta = 0.0;
+  Eigen::Vector3d p_a = Eigen::Vector3d::Zero(), p_b = Eigen::Vector3d::Zero();
+  ExtremalStatus status = ExtremalStatus::kNotConverged;
+};
+OnMaterial MeasureOnMaterial(const Watched& wa, const BodyPose& pa, const Watched& wb,
+                             const BodyPose& pb, const SurfaceSurfaceExtremum& e);
+
+/// A face extremum on the material held on its surface's border (ExtremalStatus::kAtBoundary,
+/// every held parameter on a trimmed surface): where a face's material reaches its surface's
+/// border (an imported cylinder wall's top at a hole's rim), the border is the material's edge
+/// and the held extremum its contact with the other surface, as a trim edge's is. The servo's
+/// trimmed term measures it so (a face contact held on a bound, with its boundary Hessian); the
+/// stage keeps and finds it alike, rather than calling it gone from the domain and finding it
+/// again every pass. `on`: its MeasureOnMaterial.
+bool HeldOnMaterialBorder(const Watched& wa, const Watched& wb, const SurfaceSurfaceExtremum& e,
+                          const OnMaterial& on);
+
+/// The near misses of surfaces a < b that the last pass kept (m.misses), each re-solved from its
+/// parameters at poses pa, pb (a continuation solve), into m.revived: those that converged to
+/// the same extremum moved (not another: FoundAnotherExtremum), one per pair of points. The
+/// caller takes each as a contact, a near miss again, or neither. docs/contact.md, "Near
+/// misses".
+void ReviveNearMisses(GlobalContactStage::Impl& m, int a, int b, const BodyPose& pa,
+                      const BodyPose& pb);
+
+/// Whether a refinement's answer e for surfaces a, b is a near miss to keep: a converged minimum
+/// with facing normals, activation ≤ β < the offsets' reach, on two untrimmed surfaces.
+bool IsNearMiss(const GlobalContactStage::Impl& m, const GlobalOptions& options, int a, int b,
+                const SurfaceSurfaceExtremum& e);
+
+}  // namespace internal
 
 }  // namespace tangent::contact

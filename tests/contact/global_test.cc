@@ -2,8 +2,9 @@
 // configurations near contact, the contacts found with β > −0.3 mm match a brute-force reference
 // (dense samples of both wires, local minima of their distance, the same Newton solver): none
 // missed, none duplicated, none extra, positions within 1e-9 m. The inner/outer-loop case gives two
-// contacts; grazing, hysteresis and deep interpenetration give the right events; filters and bad
-// input.
+// contacts; grazing, hysteresis and deep interpenetration give the right events; near misses are
+// carried and skip their blocks; a fresh pass skips the blocks round what it finds; filters and
+// bad input.
 
 #include "contact/global.h"
 
@@ -284,6 +285,106 @@ TEST(GlobalTest, GrazingHysteresisAndDeepInterpenetrationEvents) {
     EXPECT_EQ(ev.kind, ContactEvent::Kind::kAdded);
     EXPECT_NEAR(ev.contact.beta, -0.4 * mm, 1e-9);
   }
+}
+
+// Near misses (docs/contact.md, "Near misses"): clip b 0.15 mm over both of a's inner legs, apart
+// by more than the activation distance (0.1 mm) and within the offsets' reach (2 x 0.27 mm).
+TEST(GlobalTest, NearMissesAreCarriedFromPassToPassAndSkipTheirBlocks) {
+  const Clips c;
+  const GlobalOptions opt;
+  GlobalContactStage stage(c.Surfaces(2), {{0, 1}}, opt);
+  std::vector<ContactEvent> events;
+  GlobalStats first, st;
+  auto nearest = [&] {
+    EXPECT_EQ(stage.viewed().size(), 1u);
+    return stage.viewed().empty() ? 0.0 : stage.viewed()[0].nearest;
+  };
+  // First pass: the narrow phase and a refinement per crossing find both near misses.
+  stage.Run(AcrossTheInnerLoop(0.15 * mm), {}, &events, &first);
+  EXPECT_TRUE(stage.found().empty());
+  EXPECT_EQ(first.near_misses, 0);
+  EXPECT_GT(first.chunk_pairs_tested, 0);
+  EXPECT_GE(first.seeds_refined, 2);
+  EXPECT_NEAR(nearest(), 0.15 * mm, 1e-9);
+  // Then each is re-solved where it moved, and the blocks round it skip the narrow phase.
+  for (double gap : {0.15 * mm, 0.12 * mm, 0.18 * mm}) {
+    stage.Run(AcrossTheInnerLoop(gap), {}, &events, &st);
+    EXPECT_TRUE(stage.found().empty());
+    EXPECT_EQ(st.near_misses, 2);
+    EXPECT_EQ(st.chunk_pairs_tested, 0);
+    EXPECT_EQ(st.seeds_refined, 0);
+    EXPECT_NEAR(nearest(), gap, 1e-9);
+  }
+  // Nearer than the activation distance they are contacts, on the points a stage that carries
+  // nothing finds from its seeds.
+  GlobalOptions fresh_options = opt;
+  fresh_options.near_misses = false;
+  GlobalContactStage fresh(c.Surfaces(2), {{0, 1}}, fresh_options);
+  stage.Run(AcrossTheInnerLoop(0.05 * mm), {}, &events, &st);
+  fresh.Run(AcrossTheInnerLoop(0.05 * mm), {}, &events);
+  EXPECT_EQ(st.near_misses, 2);
+  EXPECT_EQ(st.chunk_pairs_tested, 0);
+  ASSERT_EQ(stage.found().size(), 2u);
+  ASSERT_EQ(fresh.found().size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    EXPECT_NEAR(stage.found()[k].beta, 0.05 * mm, 1e-12);
+    EXPECT_LT((stage.found()[k].p_a - fresh.found()[k].p_a).norm(), 1e-12);
+    EXPECT_LT((stage.found()[k].p_b - fresh.found()[k].p_b).norm(), 1e-12);
+  }
+  // Beyond the offsets' reach nothing is carried: back within it, the pass starts afresh.
+  stage.Run(AcrossTheInnerLoop(1.0 * mm), {}, &events, &st);
+  EXPECT_EQ(st.near_misses, 0);
+  stage.Run(AcrossTheInnerLoop(0.15 * mm), {}, &events, &st);
+  EXPECT_EQ(st.near_misses, 0);
+  EXPECT_EQ(st.chunk_pairs_tested, first.chunk_pairs_tested);
+  // Without near misses every pass is the first.
+  for (int k = 0; k < 2; ++k) {
+    fresh.Run(AcrossTheInnerLoop(0.15 * mm), {}, &events, &st);
+    EXPECT_EQ(st.near_misses, 0);
+    EXPECT_EQ(st.chunk_pairs_tested, first.chunk_pairs_tested);
+  }
+}
+
+TEST(GlobalTest, ATrackedContactRemovedAsSeparatedIsCarriedAsANearMiss) {
+  const Clips c;
+  GlobalContactStage stage(c.Surfaces(2), {{0, 1}}, GlobalOptions{});
+  std::vector<ContactEvent> events;
+  GlobalStats st;
+  stage.Run(AcrossTheInnerLoop(0.0), {}, &events);
+  ASSERT_EQ(events.size(), 2u);
+  std::vector<GlobalContact> tracked;
+  for (const ContactEvent& e : events) tracked.push_back(e.contact);
+  // Beyond the release distance both are removed; the next pass re-solves them rather than
+  // searching their blocks again, and finds them in contact.
+  stage.Run(AcrossTheInnerLoop(0.25 * mm), tracked, &events);
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events[0].reason, ContactEvent::Reason::kSeparated);
+  stage.Run(AcrossTheInnerLoop(0.05 * mm), {}, &events, &st);
+  EXPECT_EQ(st.near_misses, 2);
+  EXPECT_EQ(st.chunk_pairs_tested, 0);
+  ASSERT_EQ(events.size(), 2u);
+  for (const ContactEvent& e : events) {
+    EXPECT_EQ(e.kind, ContactEvent::Kind::kAdded);
+    EXPECT_NEAR(e.contact.beta, 0.05 * mm, 1e-12);
+  }
+}
+
+// A pass tests the block pairs nearest first and refines each new cluster at once: what it
+// finds skips the blocks round it, in a pass that carries nothing and tracks nothing.
+TEST(GlobalTest, AFreshPassSkipsTheBlocksRoundWhatItFinds) {
+  const Clips c;
+  GlobalOptions opt;
+  opt.near_misses = false;
+  GlobalContactStage stage(c.Surfaces(2), {{0, 1}}, opt);
+  std::vector<ContactEvent> events;
+  GlobalStats st;
+  stage.Run(AcrossTheInnerLoop(-0.2 * mm), {}, &events, &st);
+  ASSERT_EQ(stage.found().size(), 2u);
+  EXPECT_GT(st.chunk_pairs_skipped, st.chunk_pairs_tested);
+  EXPECT_EQ(st.seeds_refined, 2);
+  std::printf("fresh pass, two crossings 0.2 mm deep: %d block pairs tested, %d skipped, %d "
+              "refinements\n",
+              st.chunk_pairs_tested, st.chunk_pairs_skipped, st.seeds_refined);
 }
 
 TEST(GlobalTest, OnlyDeclaredPairsAreTested) {
