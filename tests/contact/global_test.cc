@@ -382,9 +382,10 @@ TEST(GlobalTest, AFreshPassSkipsTheBlocksRoundWhatItFinds) {
   ASSERT_EQ(stage.found().size(), 2u);
   EXPECT_GT(st.chunk_pairs_skipped, st.chunk_pairs_tested);
   EXPECT_EQ(st.seeds_refined, 2);
-  std::printf("fresh pass, two crossings 0.2 mm deep: %d block pairs tested, %d skipped, %d "
-              "refinements\n",
-              st.chunk_pairs_tested, st.chunk_pairs_skipped, st.seeds_refined);
+  std::printf(
+      "fresh pass, two crossings 0.2 mm deep: %d block pairs tested, %d skipped, %d "
+      "refinements\n",
+      st.chunk_pairs_tested, st.chunk_pairs_skipped, st.seeds_refined);
 }
 
 TEST(GlobalTest, OnlyDeclaredPairsAreTested) {
