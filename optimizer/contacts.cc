@@ -153,10 +153,24 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
     st->ext =
         contact::SolveSurfaceSurface(*f_, pf, *g_, pg, start, contact::kContinuation, &st->eval);
     ++st->solves;
-    bool held = false;
-    // (The held pair is evaluated only after a far solve: the cheap test first.)
-    if (st->valid &&
-        contact::ParameterDistance(*f_, *g_, start, st->ext.u) > contact::kMaxResolveJump) {
+    bool held = false, undecided = false;
+    if (st->valid && (st->ext.status == contact::ExtremalStatus::kNotConverged ||
+                      st->ext.status == contact::ExtremalStatus::kSingular)) {
+      // A solve that did not converge, or ended on a singular Newton matrix, says nothing of
+      // where this contact went. Near a pitchfork of the distance (two wires turning towards
+      // parallel: a minimum either side of a saddle, a few 1e-3 of a domain apart) Newton stops
+      // between them or on the other side's minimum, and taking that point let both rows of a
+      // split contact end on one minimum (bench/hooks_turn: the rings apart at 14.5°). Hold
+      // the parameters it started from (β = d·n there, continuous in the poses), as for another
+      // extremum below, and let the tracker go on from them.
+      contact::SurfacePairEval held_eval;
+      st->ext = contact::ExtremumAt(*f_, pf, *g_, pg, start, kTrackedResidual, &held_eval);
+      st->eval = held_eval;
+      ++st->undecided;
+      held = undecided = true;
+    } else if (st->valid &&
+               contact::ParameterDistance(*f_, *g_, start, st->ext.u) > contact::kMaxResolveJump) {
+      // (The held pair is evaluated only after a far solve: the cheap test first.)
       contact::SurfacePairEval held_eval;
       const contact::SurfaceSurfaceExtremum at_start =
           contact::ExtremumAt(*f_, pf, *g_, pg, start, kTrackedResidual, &held_eval);
@@ -169,8 +183,9 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
         held = true;
       }
     }
-    st->tracking = !held && st->ext.status == contact::ExtremalStatus::kConverged &&
-                   st->tracker.Reset(pf.q, pg.q, st->ext.u) == contact::TrackStatus::kTracked;
+    st->tracking =
+        (undecided || (!held && st->ext.status == contact::ExtremalStatus::kConverged)) &&
+        st->tracker.Reset(pf.q, pg.q, st->ext.u) == contact::TrackStatus::kTracked;
   }
   st->u = st->ext.u;
   st->q_f = pf.q;

@@ -27,6 +27,9 @@ struct ContactSlotState : TermState {
   /// at its last parameters (β = d·n there, continuous in the poses) until the global stage
   /// re-finds the contact.
   int64_t jumps = 0;
+  /// Solves that ended not converged or on a singular Newton matrix: the pair is then held at
+  /// the parameters the solve started from, and the tracker goes on from there.
+  int64_t undecided = 0;
   /// Which form the contact took at the last evaluation (contact::TrimmedForm): kFace but on
   /// trimmed pairs, where an edge against a face, or two edges, may hold it.
   contact::TrimmedForm form = contact::TrimmedForm::kFace;

@@ -112,12 +112,112 @@ TEST(ConformalTest, ARodPressedIntoAGrooveAndSlidAlongItIsHeldAsALine) {
   EXPECT_LE(run.max_force_step, 0.05);  // the press's 0.3 N/s, not a contact found late
 }
 
-TEST(ConformalTest, AsOnePointTheGrooveDoesNotHoldTheRod) {
-  // The default model: the continuum is no contact the global stage takes, so nothing resists
-  // the press and the hand feels nothing (what the line model above is for).
-  const Outcome run = Drive(false, 3.0);
-  EXPECT_LT(std::abs(run.press_force), 0.1);
+TEST(ConformalTest, AsOnePointTheGrooveHoldsTheRodOnOneRow) {
+  // The default model: one row on the continuum of extremal pairs, held where its solves end
+  // singular (optimizer/contacts.h, ContactSlotState::undecided). It holds the press and the
+  // slide (before that hold, nothing resisted the press and the hand felt nothing); the line
+  // model above shares the load along the rod instead of carrying it on one point.
+  const Outcome run = Drive(false, 5.0);
+  EXPECT_LE(run.worst_violation, 1e-6);
+  EXPECT_NEAR(run.press_force, 0.6, 0.006);
+  EXPECT_GT(run.slide_force_min, 0.594);
+  EXPECT_LT(run.slide_force_max, 0.606);
   EXPECT_EQ(run.line_ticks, 0);
+  EXPECT_EQ(run.slide_allocations, 0);
+  EXPECT_LE(run.worst_axis, 1e-6);
+  EXPECT_LE(run.max_force_step, 0.05);
+}
+
+// Issue 33's fourth canonical case (testing/conformal_scenes.h, kHooksScene; bench/hooks_turn):
+// two wire rings hooked through each other, the free one pulled 2 mm from 1 s, then turned by
+// the hand about the line between the centres, ±40° over 8 s from 3 s. At 14.5° the one
+// contact point becomes a saddle with a minimum either side (a pitchfork); the rings must stay
+// hooked on both.
+struct HooksOutcome {
+  double worst_violation = 0.0;
+  double worst_x = 0.0;         ///< the ring's largest x (mm): 1.5 where the other holds it
+  double pulled_force = 0.0;    ///< F_x at 3 s, before the turn
+  double max_force_step = 0.0;  ///< between device steps (N)
+  int most_contacts = 0;
+  double peak_force[2] = {0, 0};          ///< |F| at +40° (5 s) and −40° (9 s)
+  double peak_smaller_share[2] = {1, 1};  ///< the smaller of the two rows' loads over their sum
+  long allocations = 0;                   ///< in the servo's ticks from 3 s
+};
+
+HooksOutcome DriveHooks() {
+  const auto scene = ParseScene(testing::kHooksScene, "hooks.json");
+  ServoOptions options;
+  options.dof = 6;
+  ServoLoop servo(*scene, options);
+  GlobalLink link(servo);
+  TickResult r;
+  Snapshot snap;
+  HooksOutcome out;
+  const int ring = scene->BodyIndex("ring");
+  int64_t now = 1'000'000'000;
+  Eigen::Vector3d last = Eigen::Vector3d::Zero();
+  for (int step = 1; step <= 11000; ++step) {
+    const double t = 1e-3 * step;
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    if (t > 1.0) p.x() = 2e-3 * std::min(1.0, t - 1.0);
+    const double angle =
+        t > 3.0 ? (40 * std::numbers::pi / 180) * std::sin(std::numbers::pi * (t - 3.0) / 4.0)
+                : 0.0;
+    const DeviceSample s = bench::HandSample(
+        step, now, p, Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX())));
+    const long before = testing::AllocationCount();
+    for (int tick = 0; tick < 4; ++tick) {
+      servo.Tick(&s, now, &r);
+      now += 250'000;
+      out.worst_violation = std::max(out.worst_violation, r.violation);
+    }
+    if (t > 3.0) out.allocations += testing::AllocationCount() - before;
+    servo.FillSnapshot(&snap);
+    link.PassInto(&servo, snap);
+    const Eigen::Vector3d f(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
+    out.max_force_step = std::max(out.max_force_step, (f - last).norm());
+    last = f;
+    out.worst_x = std::max(out.worst_x, snap.q[ring][0] * 1e3);
+    out.most_contacts = std::max(out.most_contacts, snap.num_contacts);
+    if (step == 3000) out.pulled_force = f.x();
+    for (int peak = 0; peak < 2; ++peak) {
+      if (step != (peak == 0 ? 5000 : 9000)) continue;
+      out.peak_force[peak] = f.norm();
+      double sum = 0.0, smaller = 1e9;
+      for (int c = 0; c < snap.num_contacts; ++c) {
+        sum += snap.contacts[c].force;
+        smaller = std::min(smaller, snap.contacts[c].force);
+      }
+      out.peak_smaller_share[peak] = snap.num_contacts == 2 ? smaller / sum : 0.0;
+    }
+  }
+  std::printf(
+      "hooks: worst violation %.1e m, ring x at most %.4f mm, pulled %.4f N, at ±40° |F| %.4f / "
+      "%.4f N with the smaller row's share %.3f / %.3f, most contacts %d, largest force step "
+      "%.4f N, %ld allocations\n",
+      out.worst_violation, out.worst_x, out.pulled_force, out.peak_force[0], out.peak_force[1],
+      out.peak_smaller_share[0], out.peak_smaller_share[1], out.most_contacts, out.max_force_step,
+      out.allocations);
+  return out;
+}
+
+TEST(ConformalTest, TwoHooksTurnedFromCrossingTowardsParallelStayHookedOnBothMinima) {
+  const HooksOutcome run = DriveHooks();
+  EXPECT_LE(run.worst_violation, 1e-6);
+  // Never pulled through: the other ring holds this one at x = 1.5 mm (2 x 1.2 mm major radius
+  // less 2 x 0.45 mm wire) or nearer, as the turned rings nestle.
+  EXPECT_LE(run.worst_x, 1.5 + 1e-6);
+  EXPECT_NEAR(run.pulled_force, -0.6, 0.001);  // k x (2 mm − 0 mm held) at 300 N/m
+  // Beyond the pitchfork both minima are rows, each carrying a share of the load, the same
+  // turned either way.
+  EXPECT_EQ(run.most_contacts, 2);
+  for (int peak = 0; peak < 2; ++peak) {
+    EXPECT_GT(run.peak_force[peak], 0.6);
+    EXPECT_GT(run.peak_smaller_share[peak], 0.25);
+  }
+  EXPECT_NEAR(run.peak_force[0], run.peak_force[1], 1e-3);
+  EXPECT_LE(run.max_force_step, 0.05);
+  EXPECT_EQ(run.allocations, 0);
 }
 
 // Issue 33's second canonical case: a ball in a spherical socket of 1 % larger radius
