@@ -76,6 +76,11 @@ struct GlobalOptions {
   /// blocks make the skip effective; build the offset meshes with a max_edge (MakeOffsetMesh)
   /// well below far_factor x ρ so that flat stretches are cut too.
   int chunk_u_cells = 1, chunk_v_cells = 7;
+  /// A surface pair with more near block pairs than this (its blocks near the other surface's
+  /// box, one count times the other) pairs them by a sweep along one axis; fewer, every one
+  /// against every other. Measured: twenty clips' ~10 x 10 ran 13 % slower through the sweep's
+  /// sorts; a ball in a socket's ~1,800 x 960 made its test 4.3 s instead of 3.3 s without it.
+  int sweep_above = 4096;
 };
 
 /// An extremal contact between surfaces a < b (indices into the stage's surfaces): parameters

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -135,15 +136,45 @@ Eigen::Vector3d Centroid(const Watched& w, const BodyPose& pose, int t) {
   return pose.Point(c / 3.0);
 }
 
-// Whether block pair (ca, cb) lies, on both surfaces, within far_factor·ρ along the surface of a
+// Which of the pair's centres (bit i: m.centres[i], the first 64) lie within far_factor·ρ along
+// surface w of all of its chunk k; `side` 0 for the pair's first surface, 1 for its second.
+// Kept per chunk for this search (a chunk is in many block pairs), extended as centres come.
+uint64_t CentresNear(const GlobalContactStage::Impl& m, const GlobalOptions& options, Watched& w,
+                     int k, int side) {
+  const double far = options.far_factor * options.neglect_radius;
+  const size_t i = static_cast<size_t>(k);
+  if (w.near_search[i] != m.search) {
+    w.near_search[i] = m.search;
+    w.near_mask[i] = 0;
+    w.near_upto[i] = 0;
+  }
+  const int n = static_cast<int>(std::min<size_t>(m.centres.size(), 64));
+  const Chunk& chunk = w.chunks[i];
+  for (int c = w.near_upto[i]; c < n; ++c) {
+    const Eigen::Vector4d& u = m.centres[static_cast<size_t>(c)].u;
+    const Eigen::Vector2d x =
+        side == 0 ? Eigen::Vector2d(u.head<2>()) : Eigen::Vector2d(u.tail<2>());
+    if (w.FarthestAlong(x, chunk) <= far) w.near_mask[i] |= uint64_t{1} << c;
+  }
+  w.near_upto[i] = n;
+  return w.near_mask[i];
+}
+
+// Whether block pair (ka, kb) lies, on both surfaces, within far_factor·ρ along the surface of a
 // centre of neglect (m.centres: a tracked contact, a near miss, or what a cluster of this pass
 // reached): every seed it could give would fall in that centre's sphere.
-bool NearACentre(const GlobalContactStage::Impl& m, const GlobalOptions& options, const Watched& wa,
-                 const Watched& wb, const Chunk& ca, const Chunk& cb) {
+bool NearACentre(GlobalContactStage::Impl& m, const GlobalOptions& options, Watched& wa,
+                 Watched& wb, int ka, int kb) {
+  if (CentresNear(m, options, wa, ka, 0) & CentresNear(m, options, wb, kb, 1)) return true;
+  // (Beyond 64 centres, one by one.)
   const double far = options.far_factor * options.neglect_radius;
-  return std::any_of(m.centres.begin(), m.centres.end(), [&](const Centre& c) {
-    return wa.FarthestAlong(c.u.head<2>(), ca) <= far && wb.FarthestAlong(c.u.tail<2>(), cb) <= far;
-  });
+  const Chunk& ca = wa.chunks[static_cast<size_t>(ka)];
+  const Chunk& cb = wb.chunks[static_cast<size_t>(kb)];
+  return std::any_of(m.centres.begin() + std::min<long>(64, static_cast<long>(m.centres.size())),
+                     m.centres.end(), [&](const Centre& c) {
+                       return wa.FarthestAlong(c.u.head<2>(), ca) <= far &&
+                              wb.FarthestAlong(c.u.tail<2>(), cb) <= far;
+                     });
 }
 
 // Narrow phase on one block pair of surfaces a, b: its intersecting offset triangles (primitive
@@ -308,6 +339,7 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
   const BodyPose& pa = poses[static_cast<size_t>(wa.s.body)];
   const BodyPose& pb = poses[static_cast<size_t>(wb.s.body)];
   const Box domains = internal::PairBoxOf(*wa.s.surface, *wb.s.surface);
+  ++m.search;  // (the chunks' centre masks are this search's: CentresNear)
   // Centres of neglect: the pair's tracked contacts where they are now, then its near misses.
   m.centres.clear();
   for (const GlobalContact& c : tracked) {
@@ -367,7 +399,8 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
   for (const auto& [distance, k] : m.order) {
     const Chunk& ca = wa.chunks[static_cast<size_t>(m.candidates[k][2])];
     const Chunk& cb = wb.chunks[static_cast<size_t>(m.candidates[k][3])];
-    if (NearACentre(m, options_, wa, wb, ca, cb)) {
+    if (NearACentre(m, options_, m.watched[static_cast<size_t>(a)],
+                    m.watched[static_cast<size_t>(b)], m.candidates[k][2], m.candidates[k][3])) {
       ++st->chunk_pairs_skipped;
       continue;
     }

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -37,8 +38,14 @@ struct Watched {
   std::unique_ptr<fcl::CollisionObjectd> object;
   std::vector<WorldBox> placed;  // chunks' world boxes (placed on demand, once a pass)
   std::vector<int> placed_at;    // the pass each chunk's world box was placed in (-1: none)
-  double L_u = 1.0, L_v = 1.0;   // mean |S_u|, |S_v|: metres per parameter unit
-  double w_u = 1.0, w_v = 1.0;   // domain widths
+  // Per chunk, which of the current surface pair's centres of neglect lie within far_factor x ρ
+  // of all of it (global_seeds.cc, NearACentre): bit i for centre i, valid for the search
+  // `near_search` and its first `near_upto` centres (later centres are added as they come).
+  std::vector<uint64_t> near_mask;
+  std::vector<int> near_search;
+  std::vector<int> near_upto;
+  double L_u = 1.0, L_v = 1.0;  // mean |S_u|, |S_v|: metres per parameter unit
+  double w_u = 1.0, w_v = 1.0;  // domain widths
   bool periodic_u = false, periodic_v = false;
 
   // Pole rows (a domain edge collapsed to one point: a sphere's or a revolved part's apex):
@@ -164,6 +171,7 @@ struct GlobalContactStage::Impl {
   // FindContacts' block pairs in the order it tests them: (distance², index into candidates).
   std::vector<std::pair<double, size_t>> order;
   int n = 0, pass = 0;
+  int search = 0;  ///< FindContacts calls so far (the chunks' near_search stamps)
   bool Allowed(int a, int b) const {
     const int ba = watched[static_cast<size_t>(a)].s.body,
               bb = watched[static_cast<size_t>(b)].s.body;
