@@ -85,6 +85,17 @@ Watched WatchSurface(int index, const GlobalSurface& s, const GlobalOptions& opt
   w.near_mask.assign(w.chunks.size(), 0);
   w.near_search.assign(w.chunks.size(), -1);
   w.near_upto.assign(w.chunks.size(), 0);
+  {
+    std::vector<int> ids(w.chunks.size());
+    std::vector<Eigen::AlignedBox3d> boxes(w.chunks.size());
+    for (size_t k = 0; k < w.chunks.size(); ++k) {
+      ids[k] = static_cast<int>(k);
+      boxes[k] = Eigen::AlignedBox3d(w.chunks[k].centre - w.chunks[k].half,
+                                     w.chunks[k].centre + w.chunks[k].half);
+    }
+    w.chunk_tree = std::make_unique<Eigen::KdBVH<double, 3, int>>(ids.begin(), ids.end(),
+                                                                  boxes.begin(), boxes.end());
+  }
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
   for (const Eigen::Vector3d& x : s.mesh->vertices) {
     lo = lo.cwiseMin(x);
@@ -283,15 +294,29 @@ void GlobalContactStage::BroadPhase(const std::vector<BodyPose>& poses, GlobalSt
   auto near = [&](Watched& w, const BodyPose& p, const WorldBox& other, std::vector<int>* out) {
     const Eigen::Vector3d c = p.R_WB.transpose() * (0.5 * (other.lo + other.hi) - p.q.head<3>());
     const Eigen::Vector3d h = p.R_WB.transpose().cwiseAbs() * (0.5 * (other.hi - other.lo));
-    for (size_t k = 0; k < w.chunks.size(); ++k) {
-      const Chunk& ch = w.chunks[k];
-      if (((ch.centre - c).cwiseAbs().array() > (ch.half + h).array()).any()) continue;
-      if (w.placed_at[k] != m.pass) {
-        w.placed[k] = Place(p, ch.centre, ch.half);
-        w.placed_at[k] = m.pass;
+    // The chunks' tree, not every chunk: a part's face has thousands.
+    struct Query {
+      const Eigen::AlignedBox3d box;
+      std::vector<int>* out;
+      bool intersectVolume(const Eigen::AlignedBox3d& v) const { return v.intersects(box); }
+      bool intersectObject(int k) {
+        out->push_back(k);
+        return false;  // (keep going)
       }
-      out->push_back(static_cast<int>(k));
+    } query{Eigen::AlignedBox3d(c - h, c + h), out};
+    Eigen::BVIntersect(*w.chunk_tree, query);
+    std::sort(out->begin(), out->end());  // (the order the chunks are stored in, as a scan's)
+    size_t kept = 0;
+    for (int k : *out) {
+      const Chunk& ch = w.chunks[static_cast<size_t>(k)];
+      if (((ch.centre - c).cwiseAbs().array() > (ch.half + h).array()).any()) continue;
+      if (w.placed_at[static_cast<size_t>(k)] != m.pass) {
+        w.placed[static_cast<size_t>(k)] = Place(p, ch.centre, ch.half);
+        w.placed_at[static_cast<size_t>(k)] = m.pass;
+      }
+      (*out)[kept++] = k;
     }
+    out->resize(kept);
   };
   for (const auto& [a, b] : m.surface_pairs) {
     if (m.FacePair(a, b)) continue;  // (their corners are measured instead: FindFaces)

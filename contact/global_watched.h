@@ -18,6 +18,8 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <unsupported/Eigen/BVH>
 
 #include "contact/global.h"
 #include "contact/global_minima.h"
@@ -32,6 +34,9 @@ struct Watched {
   std::unique_ptr<TrimEdges> edges;     // when trimmed
   std::optional<nurbs::FlatQuad> flat;  // when a flat quadrilateral face, untrimmed (face_gap.h)
   std::vector<Chunk> chunks;
+  // The chunks' boxes (surface frame) in a bounding-volume tree, built when the surface is
+  // watched: the broad phase asks it which chunks lie near another surface's box.
+  std::unique_ptr<Eigen::KdBVH<double, 3, int>> chunk_tree;
   // The whole offset mesh's box (surface frame) as an FCL box: the object the broad-phase
   // manager sees.
   Eigen::Vector3d centre = Eigen::Vector3d::Zero(), half = Eigen::Vector3d::Zero();
