@@ -50,13 +50,8 @@ int main(int argc, char** argv) {
               options.line_contacts ? "on" : "off", options.step_reach ? "on" : "off");
   for (int step = 1; step <= static_cast<int>(seconds * 1000); ++step) {
     const double t = 1e-3 * step;
-    Eigen::Vector3d p = Eigen::Vector3d::Zero();
-    if (t > 1.0) p.x() = 2e-3 * std::min(1.0, t - 1.0);
-    const double angle =
-        t > 3.0 ? (40 * std::numbers::pi / 180) * std::sin(std::numbers::pi * (t - 3.0) / 4.0)
-                : 0.0;
-    const Eigen::Quaterniond q(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX()));
-    const DeviceSample s = tangent::bench::HandSample(step, now, p, q);
+    const DeviceSample s = tangent::bench::HooksHandSample(step, now);
+    const double angle = 2 * std::atan2(s.orientation[1], s.orientation[0]);  // (turn about x)
     for (int tick = 0; tick < 4; ++tick) {
       servo.Tick(&s, now, &r);
       now += 250'000;

@@ -98,6 +98,16 @@ Eigen::Vector2d ParametersAt(const Watched& w, const BodyPose& pose, int t,
 // Domain bounds and periodicity of a pair's four parameters.
 using Box = internal::PairBox;
 
+// Whether the point (u, x) of surfaces wa, wb (parameters, world midpoint) lies in the sphere of
+// neglect centred at (c_u, c_x): within ρ in space and within far_factor·ρ along both surfaces.
+bool InSphere(const Watched& wa, const Watched& wb, const GlobalOptions& options,
+              const Eigen::Vector4d& c_u, const Eigen::Vector3d& c_x, const Eigen::Vector4d& u,
+              const Eigen::Vector3d& x) {
+  const double far = options.far_factor * options.neglect_radius;
+  return (c_x - x).norm() < options.neglect_radius && wa.Along(c_u.head<2>(), u.head<2>()) <= far &&
+         wb.Along(c_u.tail<2>(), u.tail<2>()) <= far;
+}
+
 void AddToCluster(const Eigen::Vector4d& u, const Box& box, Seed* c) {
   for (int i = 0; i < 4; ++i) {
     if (box.periodic[static_cast<size_t>(i)]) {
@@ -203,7 +213,6 @@ void CollideBlocks(GlobalContactStage::Impl& m, const GlobalOptions& options, co
 void ClusterSeeds(GlobalContactStage::Impl& m, const GlobalOptions& options, const Watched& wa,
                   const Watched& wb, const BodyPose& pa, const BodyPose& pb, const Box& domains,
                   size_t from, size_t n_centres, GlobalStats* st) {
-  const double rho = options.neglect_radius, far = options.far_factor * rho;
   std::vector<Seed>& accepted = m.accepted;
   for (size_t t = from; t < m.triangle_pairs.size(); ++t) {
     const auto [ta, tb] = m.triangle_pairs[t];
@@ -217,8 +226,7 @@ void ClusterSeeds(GlobalContactStage::Impl& m, const GlobalOptions& options, con
     Seed* owner = nullptr;
     for (size_t k = 0; k < accepted.size(); ++k) {
       const Seed& o = accepted[k];
-      if ((o.x - s.x).norm() < rho && wa.Along(o.u.head<2>(), s.u.head<2>()) <= far &&
-          wb.Along(o.u.tail<2>(), s.u.tail<2>()) <= far) {
+      if (InSphere(wa, wb, options, o.u, o.x, s.u, s.x)) {
         owner = k >= n_centres ? &accepted[k] : nullptr;
         ++st->seeds_neglected;
         s.count = -1;  // neglected
@@ -275,12 +283,11 @@ void RefineCluster(GlobalContactStage::Impl& m, const GlobalOptions& options, in
                    double* nearest) {
   const Watched& wa = m.watched[static_cast<size_t>(a)];
   const Watched& wb = m.watched[static_cast<size_t>(b)];
-  const double rho = options.neglect_radius, far = options.far_factor * rho;
+  const double rho = options.neglect_radius;
   Seed& cl = m.accepted[k];
   if (cl.done) return;
   const bool covered = std::any_of(m.centres.begin(), m.centres.end(), [&](const Centre& c) {
-    return (c.x - cl.x).norm() < rho && wa.Along(c.u.head<2>(), cl.u.head<2>()) <= far &&
-           wb.Along(c.u.tail<2>(), cl.u.tail<2>()) <= far;
+    return InSphere(wa, wb, options, c.u, c.x, cl.u, cl.x);
   });
   if (covered) {
     ++st->seeds_neglected;
@@ -351,7 +358,6 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
   // The last pass's near misses, re-solved: each now a contact, a near miss again (kept for the
   // next pass), or neither (dropped); the first two become centres. One that came within the
   // sphere of neglect of a tracked contact is that contact.
-  const double rho = options_.neglect_radius, far = options_.far_factor * rho;
   const size_t n_tracked = m.centres.size();
   double nearest = std::numeric_limits<double>::infinity();
   bool revived = false;
@@ -362,10 +368,8 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
     if (!contact && !IsNearMiss(m, options_, a, b, r.e)) continue;
     const Eigen::Vector3d x = 0.5 * (r.e.p_f + r.e.p_g);
     const bool tracked_here = std::any_of(
-        m.centres.begin(), m.centres.begin() + static_cast<long>(n_tracked), [&](const Centre& c) {
-          return (c.x - x).norm() < rho && wa.Along(c.u.head<2>(), r.e.u.head<2>()) <= far &&
-                 wb.Along(c.u.tail<2>(), r.e.u.tail<2>()) <= far;
-        });
+        m.centres.begin(), m.centres.begin() + static_cast<long>(n_tracked),
+        [&](const Centre& c) { return InSphere(wa, wb, options_, c.u, c.x, r.e.u, x); });
     if (tracked_here) continue;
     if (r.e.kind == ExtremumKind::kMinimum) nearest = std::min(nearest, r.e.beta);
     m.centres.push_back({r.e.u, x});

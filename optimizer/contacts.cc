@@ -153,39 +153,34 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
     st->ext =
         contact::SolveSurfaceSurface(*f_, pf, *g_, pg, start, contact::kContinuation, &st->eval);
     ++st->solves;
-    bool held = false, undecided = false;
-    if (st->valid && (st->ext.status == contact::ExtremalStatus::kNotConverged ||
-                      st->ext.status == contact::ExtremalStatus::kSingular)) {
-      // A solve that did not converge, or ended on a singular Newton matrix, says nothing of
-      // where this contact went. Near a pitchfork of the distance (two wires turning towards
-      // parallel: a minimum either side of a saddle, a few 1e-3 of a domain apart) Newton stops
-      // between them or on the other side's minimum, and taking that point let both rows of a
-      // split contact end on one minimum (bench/hooks_turn: the rings apart at 14.5°). Hold
-      // the parameters it started from (β = d·n there, continuous in the poses), as for another
-      // extremum below, and let the tracker go on from them.
-      contact::SurfacePairEval held_eval;
-      st->ext = contact::ExtremumAt(*f_, pf, *g_, pg, start, kTrackedResidual, &held_eval);
-      st->eval = held_eval;
-      ++st->undecided;
-      held = undecided = true;
-    } else if (st->valid &&
-               contact::ParameterDistance(*f_, *g_, start, st->ext.u) > contact::kMaxResolveJump) {
-      // (The held pair is evaluated only after a far solve: the cheap test first.)
+    // A solve that did not converge, or ended on a singular Newton matrix, says nothing of
+    // where this contact went (undecided). Near a pitchfork of the distance (two wires turning
+    // towards parallel: a minimum either side of a saddle, a few 1e-3 of a domain apart) Newton
+    // stops between them or on the other side's minimum, and taking that point let both rows of
+    // a split contact end on one minimum (bench/hooks_turn: the rings apart at 14.5°). A far
+    // solve may also have found another extremum of the pair (FoundAnotherExtremum; the held
+    // pair is evaluated only after a far solve: the cheap test first). Either way the pair is
+    // held at the parameters the solve started from (β = d·n there, continuous in the poses)
+    // until the global stage re-finds the contact; an undecided one's tracker goes on from them.
+    const bool undecided = st->valid && (st->ext.status == contact::ExtremalStatus::kNotConverged ||
+                                         st->ext.status == contact::ExtremalStatus::kSingular);
+    bool jumped = false;
+    if (undecided || (st->valid && contact::ParameterDistance(*f_, *g_, start, st->ext.u) >
+                                       contact::kMaxResolveJump)) {
       contact::SurfacePairEval held_eval;
       const contact::SurfaceSurfaceExtremum at_start =
           contact::ExtremumAt(*f_, pf, *g_, pg, start, kTrackedResidual, &held_eval);
-      if (contact::FoundAnotherExtremum(*f_, *g_, start, st->ext, held_eval.d.norm())) {
-        // Not this contact. Hold the last parameters: β = d·n there, continuous in the poses,
-        // until the global stage re-finds the contact.
-        ++st->jumps;
+      jumped =
+          !undecided && contact::FoundAnotherExtremum(*f_, *g_, start, st->ext, held_eval.d.norm());
+      if (undecided || jumped) {
+        ++(undecided ? st->undecided : st->jumps);
         st->ext = at_start;
         st->eval = held_eval;
-        held = true;
       }
     }
-    st->tracking =
-        (undecided || (!held && st->ext.status == contact::ExtremalStatus::kConverged)) &&
-        st->tracker.Reset(pf.q, pg.q, st->ext.u) == contact::TrackStatus::kTracked;
+    st->tracking = !jumped &&
+                   (undecided || st->ext.status == contact::ExtremalStatus::kConverged) &&
+                   st->tracker.Reset(pf.q, pg.q, st->ext.u) == contact::TrackStatus::kTracked;
   }
   st->u = st->ext.u;
   st->q_f = pf.q;

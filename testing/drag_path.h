@@ -37,6 +37,19 @@ inline server::DeviceSample HandSample(
   return s;
 }
 
+/// The hand of issue 33's fourth canonical case (testing/conformal_scenes.h, kHooksScene): at
+/// rest for 1 s, pulling 2 mm along +x over the next second, then from 3 s turning about x,
+/// ±40° in a sine of 16 s period. Device state `seq` (1 kHz: t = seq ms), received at now_ns.
+inline server::DeviceSample HooksHandSample(int64_t seq, int64_t now_ns) {
+  const double t = 1e-3 * static_cast<double>(seq);
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  if (t > 1.0) p.x() = 2e-3 * std::min(1.0, t - 1.0);
+  const double angle =
+      t > 3.0 ? (40 * std::numbers::pi / 180) * std::sin(std::numbers::pi * (t - 3.0) / 4.0) : 0.0;
+  return HandSample(seq, now_ns, p,
+                    Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX())));
+}
+
 /// The device state on that path at time t (s), received at now_ns.
 inline server::DeviceSample DragSample(int64_t seq, double t, int64_t now_ns) {
   return HandSample(seq, now_ns, DragPath(t));

@@ -158,13 +158,7 @@ HooksOutcome DriveHooks() {
   Eigen::Vector3d last = Eigen::Vector3d::Zero();
   for (int step = 1; step <= 11000; ++step) {
     const double t = 1e-3 * step;
-    Eigen::Vector3d p = Eigen::Vector3d::Zero();
-    if (t > 1.0) p.x() = 2e-3 * std::min(1.0, t - 1.0);
-    const double angle =
-        t > 3.0 ? (40 * std::numbers::pi / 180) * std::sin(std::numbers::pi * (t - 3.0) / 4.0)
-                : 0.0;
-    const DeviceSample s = bench::HandSample(
-        step, now, p, Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX())));
+    const DeviceSample s = bench::HooksHandSample(step, now);
     const long before = testing::AllocationCount();
     for (int tick = 0; tick < 4; ++tick) {
       servo.Tick(&s, now, &r);
