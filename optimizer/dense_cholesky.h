@@ -31,6 +31,9 @@ class DenseCholesky {
   const Eigen::MatrixXd& factor() const { return U_; }
 
  private:
+  template <int C>
+  bool Columns(const double* a, Eigen::Index n, Eigen::Index j0);
+
   Eigen::MatrixXd U_;
   std::vector<Eigen::Index> first_;  ///< per column, its first nonzero row (the envelope)
   /// 1 / U(j, j): the factorization and the solves multiply by it instead of dividing (a
