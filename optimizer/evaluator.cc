@@ -1,5 +1,7 @@
 #include "optimizer/evaluator.h"
 
+#include <algorithm>
+
 #include "contact/rigid.h"
 
 namespace tangent::optimizer {
@@ -15,6 +17,8 @@ ProblemEvaluator::ProblemEvaluator(const Problem& problem, bool dense_jacobians)
     values_[k].setZero(rows[k]);
     J_a_[k].setZero(rows[k], 7);
     J_b_[k].setZero(rows[k], 7);
+    kept_a_[k].setZero(rows[k], 7);
+    kept_b_[k].setZero(rows[k], 7);
     if (dense_jacobians_) dense_[k].setZero(rows[k], n);
     int index = 0;
     for (const Problem::Entry& e : List(static_cast<Kind>(k))) {
@@ -153,13 +157,16 @@ void ProblemEvaluator::ObjectiveGradient(const Eigen::VectorXd& q, const Eigen::
   }
 }
 
-void ProblemEvaluator::AddJacobianTransposeTimes(Kind kind, const Eigen::VectorXd& v, double scale,
-                                                 Eigen::VectorXd* g) const {
-  // Row by row with fixed-size 7-vectors (a dynamic d x 7 transpose product costs 3x more here).
-  const JacobianRows& Ja = J_a_[kind];
-  const JacobianRows& Jb = J_b_[kind];
-  for (const Item& it : items_[kind]) {
-    if (it.idle) continue;  // zero rows
+namespace {
+
+// g += scale · Jᵀ v over the items `skip` does not skip, row by row with fixed-size 7-vectors
+// (a dynamic d x 7 transpose product costs 3x more here).
+template <class Items, class Rows, class Skip>
+[[gnu::always_inline]] inline void TransposeTimes(const Items& items, const Rows& Ja,
+                                                  const Rows& Jb, const Eigen::VectorXd& v,
+                                                  double scale, Eigen::VectorXd* g, Skip skip) {
+  for (const auto& it : items) {
+    if (skip(it)) continue;
     if (it.block_a >= 0) {
       Vector7d ga = Vector7d::Zero();
       for (int r = it.row; r < it.row + it.dim; ++r) ga.noalias() += v[r] * Ja.row(r).transpose();
@@ -171,6 +178,29 @@ void ProblemEvaluator::AddJacobianTransposeTimes(Kind kind, const Eigen::VectorX
       g->segment<7>(7 * it.block_b) += scale * gb;
     }
   }
+}
+
+}  // namespace
+
+void ProblemEvaluator::AddJacobianTransposeTimes(Kind kind, const Eigen::VectorXd& v, double scale,
+                                                 Eigen::VectorXd* g) const {
+  // (An idle term's rows are zero.)
+  TransposeTimes(items_[kind], J_a_[kind], J_b_[kind], v, scale, g,
+                 [](const Item& it) { return it.idle; });
+}
+
+void ProblemEvaluator::KeepJacobians() {
+  for (const Kind k : {kEquality, kInequality}) {
+    std::copy_n(J_a_[k].data(), J_a_[k].size(), kept_a_[k].data());  // (sized at construction)
+    std::copy_n(J_b_[k].data(), J_b_[k].size(), kept_b_[k].data());
+    for (Item& it : items_[k]) it.kept_idle = it.idle;
+  }
+}
+
+void ProblemEvaluator::AddKeptJacobianTransposeTimes(Kind kind, const Eigen::VectorXd& v,
+                                                     double scale, Eigen::VectorXd* g) const {
+  TransposeTimes(items_[kind], kept_a_[kind], kept_b_[kind], v, scale, g,
+                 [](const Item& it) { return it.kept_idle; });
 }
 
 void ProblemEvaluator::JacobianTimes(Kind kind, const Eigen::VectorXd& x,
@@ -190,32 +220,59 @@ void ProblemEvaluator::JacobianTimes(Kind kind, const Eigen::VectorXd& x,
   }
 }
 
+namespace {
+
+// out += Σ_k wx_k y_kᵀ (wx_k = w_k x_k), column by column: each column's seven sums stay in
+// registers over the rows instead of a 7 x 7 accumulator loaded and stored for every row. The
+// products and their order are those of row-by-row rank-one updates (the same bits).
+template <class Block>
+void AddOuterProducts(const Vector7d* wx, const Vector7d* y, int m, Block&& out) {
+  for (int j = 0; j < 7; ++j) {
+    Vector7d column = wx[0] * y[0][j];
+    for (int k = 1; k < m; ++k) column.noalias() += wx[k] * y[k][j];
+    out.col(j) += column;
+  }
+}
+
+}  // namespace
+
 void ProblemEvaluator::AddGaussNewton(Kind kind, const Eigen::VectorXd& row_weights,
                                       BlockMatrix* H) const {
-  // Rank-one updates per row into fixed-size 7 x 7 accumulators; only the upper block triangle
-  // is written (the factorizations read the upper triangle).
+  // Per term, Σ_rows w a aᵀ (and b bᵀ, a bᵀ) over its rows with nonzero weight, gathered into
+  // fixed-size 7-vectors; only the upper block triangle is written (the factorizations read
+  // the upper triangle).
+  constexpr int kMaxRows = 8;
+  Vector7d a[kMaxRows], b[kMaxRows], wa[kMaxRows], wb[kMaxRows];
   const JacobianRows& Ja = J_a_[kind];
   const JacobianRows& Jb = J_b_[kind];
   for (const Item& it : items_[kind]) {
     if (it.idle) continue;  // zero rows
     // Only the blocks of moving bodies (a contact against a fixed part has one).
     const bool has_a = it.block_a >= 0, has_b = it.block_b >= 0;
-    Matrix7d aa = Matrix7d::Zero(), ab = Matrix7d::Zero(), bb = Matrix7d::Zero();
-    bool any = false;
-    for (int r = it.row; r < it.row + it.dim; ++r) {
-      const double w = row_weights[r];
-      if (w == 0.0) continue;
-      any = true;
-      const Vector7d a = Ja.row(r).transpose(), b = Jb.row(r).transpose();
-      const Vector7d wa = w * a;
-      if (has_a) aa.noalias() += wa * a.transpose();
-      if (has_b) bb.noalias() += (w * b) * b.transpose();
-      if (has_a && has_b) ab.noalias() += wa * b.transpose();
+    for (int r0 = it.row; r0 < it.row + it.dim; r0 += kMaxRows) {  // (wider terms: in parts)
+      int m = 0;
+      for (int r = r0; r < std::min(r0 + kMaxRows, it.row + it.dim); ++r) {
+        const double w = row_weights[r];
+        if (w == 0.0) continue;
+        a[m] = Ja.row(r).transpose();
+        b[m] = Jb.row(r).transpose();
+        wa[m] = w * a[m];
+        wb[m] = w * b[m];
+        ++m;
+      }
+      if (m == 0) continue;
+      if (has_a) AddOuterProducts(wa, a, m, H->Block(it.block_a, it.block_a));
+      if (has_b) AddOuterProducts(wb, b, m, H->Block(it.block_b, it.block_b));
+      if (has_a && has_b) {
+        if (it.block_a < it.block_b) {
+          AddOuterProducts(wa, b, m, H->Block(it.block_a, it.block_b));
+        } else {
+          Matrix7d ab = Matrix7d::Zero();
+          AddOuterProducts(wa, b, m, ab);
+          H->AddOffDiagonal(it.block_a, it.block_b, ab);
+        }
+      }
     }
-    if (!any) continue;
-    if (it.block_a >= 0) H->Block(it.block_a, it.block_a) += aa;
-    if (it.block_b >= 0) H->Block(it.block_b, it.block_b) += bb;
-    if (it.block_a >= 0 && it.block_b >= 0) H->AddOffDiagonal(it.block_a, it.block_b, ab);
   }
 }
 

@@ -46,6 +46,12 @@ class ProblemEvaluator {
   /// *g += scale · J_kindᵀ v (v indexed like the kind's stacked rows).
   void AddJacobianTransposeTimes(Kind kind, const Eigen::VectorXd& v, double scale,
                                  Eigen::VectorXd* g) const;
+  /// Keeps the equality and inequality Jacobians of the last evaluation (where a Newton matrix
+  /// was built: the solver's finishing correction multiplies by them after later evaluations).
+  void KeepJacobians();
+  /// g += scale · J_keptᵀ v (equality or inequality rows, as kept by KeepJacobians).
+  void AddKeptJacobianTransposeTimes(Kind kind, const Eigen::VectorXd& v, double scale,
+                                     Eigen::VectorXd* g) const;
   /// *out = J_kind x.
   void JacobianTimes(Kind kind, const Eigen::VectorXd& x, Eigen::VectorXd* out) const;
   /// H += J_kindᵀ diag(row_weights) J_kind.
@@ -94,6 +100,7 @@ class ProblemEvaluator {
     /// The term was idle (Term::Idle) at the last evaluation, and its row is written: a
     /// constant value and zero Jacobian rows, which the products and sums below skip.
     bool idle = false;
+    bool kept_idle = true;  ///< idle when KeepJacobians last kept the rows
   };
   const std::vector<Problem::Entry>& List(Kind kind) const;
 
@@ -105,6 +112,7 @@ class ProblemEvaluator {
   std::array<Eigen::VectorXd, 3> values_;
   using JacobianRows = Eigen::Matrix<double, Eigen::Dynamic, 7>;
   std::array<JacobianRows, 3> J_a_, J_b_;
+  std::array<JacobianRows, 3> kept_a_, kept_b_;  ///< KeepJacobians (objective rows unused)
   std::array<Eigen::MatrixXd, 3> dense_;
   void EvaluateKinds(const Eigen::VectorXd& q, int first, int last);
   std::vector<Eigen::Matrix3d> rotation_weights_;  // per moving block

@@ -215,10 +215,11 @@ struct HessianRows {
     const Eigen::Vector3d U = pa.R_WB * u, V = pb.R_WB * v;
     h->W_a.noalias() += (wk * V) * u.transpose();
     h->W_b.noalias() += (wk * U) * v.transpose();
-    // ∂U/∂Q_a = −[U]× Ω_a, ∂V/∂Q_b = −[V]× Ω_b.
-    h->ab.block<4, 4>(3, 3).noalias() += wk * pa.omega_map.transpose() *
-                                         (contact::Skew(U).transpose() * contact::Skew(V)) *
-                                         pb.omega_map;
+    // ∂U/∂Q_a = −[U]× Ω_a, ∂V/∂Q_b = −[V]× Ω_b, and [U]×ᵀ[V]× = (U·V) I − V Uᵀ:
+    // Ω_aᵀ[U]×ᵀ[V]×Ω_b = (U·V) Ω_aᵀΩ_b − (Ω_aᵀV)(Ω_bᵀU)ᵀ.
+    const Eigen::Vector4d x = pa.omega_map.transpose() * V, y = pb.omega_map.transpose() * U;
+    h->ab.block<4, 4>(3, 3).noalias() +=
+        (wk * U.dot(V)) * (pa.omega_map.transpose() * pb.omega_map) - (wk * x) * y.transpose();
   }
   // w (P_b − P_a)·E_a with E_a = R_a e.
   void Offset(const std::vector<BodyPose>& poses, const Attachment& a, const Attachment& b,
