@@ -6,6 +6,7 @@
 #include <Eigen/LU>
 #include <Eigen/QR>
 
+#include <algorithm>
 #include <chrono>
 #include <limits>
 
@@ -24,6 +25,15 @@ bool UseSparse(const SolverOptions& o, int n) {
       break;
   }
   return n > o.sparse_threshold;
+}
+
+// Every coordinate finite (a loop: Eigen's allFinite, (x − x) == (x − x), is an out-of-line call
+// of ~30 instructions a coordinate here).
+bool AllFinite(const Eigen::VectorXd& x) {
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    if (!std::isfinite(x[i])) return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -152,7 +162,7 @@ void Solver::UpdateDesignCurvature(const Eigen::VectorXd& q) {
   have_old_ = true;
 }
 
-void Solver::KktResidual(Eigen::VectorXd* r) const {
+[[gnu::always_inline]] inline void Solver::KktResidual(Eigen::VectorXd* r) const {
   *r = grad_e_;
   ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, lambda_e_, -1.0, r);
   ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, lambda_i_, -1.0, r);
@@ -290,7 +300,10 @@ double Solver::Lagrangian(const Eigen::VectorXd& q) {
 }
 
 double Solver::ObjectiveAt(const Eigen::VectorXd& q) {
-  if (objective_known_ && q == objective_q_) return objective_value_;
+  if (objective_known_ && q.size() == objective_q_.size() &&
+      std::equal(q.data(), q.data() + q.size(), objective_q_.data())) {
+    return objective_value_;
+  }
   objective_value_ = ev_.Objective(q, q_prev_, M_);
   objective_q_ = q;  // (sized at construction: no allocation)
   objective_known_ = true;
@@ -453,7 +466,8 @@ double Solver::NewtonStep() {
   double lm = options_.damping * objective_scale;
   H_.AddToDiagonal(lm);
   for (int attempt = 0; attempt < 40; ++attempt) {
-    if (Factorize()) {
+    factor_ok_ = Factorize();
+    if (factor_ok_) {
       SolveStep();
       if (StepWithinTrustRegion()) break;
     }
@@ -462,6 +476,41 @@ double Solver::NewtonStep() {
     lm = more;
   }
   return lm;
+}
+
+void Solver::FinishingCorrection(Eigen::VectorXd* q, SolveStats* st) {
+  // The right-hand side of a Newton step at a stationary point, −μ(J_Eᵀc_E + J_Aᵀc_A) (the
+  // KKT part ∇E − Jᵀλ within its tolerance is left out), with the last step's matrix: for
+  // μ|J|² far above the objective's curvature, H⁻¹μJᵀc is the least-norm step that cancels the
+  // linearized constraints, and its error is the factor's staleness (one step old) times c.
+  g_.setZero();
+  ev_.AddKeptJacobianTransposeTimes(ProblemEvaluator::kEquality, ev_.c_e(), mu_, &g_);
+  for (int i = 0; i < ev_.c_i().size(); ++i) jstep_i_[i] = active_[i] ? ev_.c_i()[i] : 0.0;
+  ev_.AddKeptJacobianTransposeTimes(ProblemEvaluator::kInequality, jstep_i_, mu_, &g_);
+  SolveStep();
+  if (step_.allFinite()) {
+    q_try_ = *q + step_;
+    Normalize(&q_try_);
+    ev_.Evaluate(q_try_);
+    const double violation = Violation();
+    if (violation < st->max_violation) {
+      ev_.ObjectiveGradient(q_try_, q_prev_, M_, &grad_e_);
+      KktResidual(&kkt_);
+      const double kkt = MaxAbs(kkt_);
+      if (std::isfinite(kkt)) {
+        *q = q_try_;
+        st->max_violation = violation;
+        st->kkt_residual = kkt;
+        st->complementarity = Complementarity();
+        ++st->corrections;
+        return;
+      }
+    }
+  }
+  // Not kept: everything back at q.
+  ev_.Evaluate(*q);
+  ev_.ObjectiveGradient(*q, q_prev_, M_, &grad_e_);
+  KktResidual(&kkt_);
 }
 
 SolveStats Solver::InvalidInput(Eigen::VectorXd* q, SolveStats st) {
@@ -476,7 +525,9 @@ SolveStats Solver::InvalidInput(Eigen::VectorXd* q, SolveStats st) {
   return st;
 }
 
-SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
+SolveStats Solver::Solve(Eigen::VectorXd* q_io) { return Solve(q_io, *q_io); }
+
+SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   Eigen::VectorXd& q = *q_io;
@@ -485,8 +536,12 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
   q_start_ = q;
   lambda_e_start_ = lambda_e_;
   lambda_i_start_ = lambda_i_;
-  if (!q.allFinite()) return InvalidInput(&q, SolveStats{});
-  q_prev_ = q;
+  factor_ok_ = kept_jacobians_ = false;
+  if (!AllFinite(q) ||
+      (&anchor != q_io && (anchor.size() != n_ || !AllFinite(anchor)))) {  // (anchor: as q)
+    return InvalidInput(&q, SolveStats{});
+  }
+  q_prev_ = anchor;
   problem_.mechanism().MetricBlocks(q_prev_, &M_);
   objective_known_ = false;  // (E depends on q_prev_ through least astonishment)
   SolveStats st;
@@ -557,6 +612,13 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     }
     // Converged: feasible, stationary, and complementary (no force on a separated contact).
     st.complementarity = Complementarity();
+    if (!design && factor_ok_ && kept_jacobians_ && st.iterations > 0 &&
+        st.max_violation > options_.constraint_tolerance &&
+        st.max_violation <= options_.finish_violation * options_.constraint_tolerance &&
+        st.kkt_residual <= 1e-2 * kkt_tolerance &&
+        st.complementarity <= options_.constraint_tolerance) {
+      FinishingCorrection(&q, &st);
+    }
     if (st.max_violation <= options_.constraint_tolerance &&
         st.complementarity <= options_.constraint_tolerance && st.kkt_residual <= kkt_tolerance) {
       st.converged = true;
@@ -620,6 +682,12 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io) {
     linearized_e_ = ev_.c_e();  // c at the current point, before trial evaluations replace it
     linearized_i_ = ev_.c_i();
     const double step2 = step_.squaredNorm();
+    // The finishing correction's Jacobians: those the matrix was built with. Only for a step
+    // whose second-order residual (10 |Δq|², as below) may exceed the tolerance: after a shorter
+    // one there is nothing for it to correct.
+    kept_jacobians_ =
+        options_.finish_violation > 0.0 && 10.0 * step2 > options_.constraint_tolerance;
+    if (kept_jacobians_) ev_.KeepJacobians();
     // Design mode: the Lagrangian at q and its slope along the step (kkt_ is its gradient).
     const double lagrangian = design ? Lagrangian(q) : 0.0;
     const double slope = design ? kkt_.dot(step_) : 0.0;

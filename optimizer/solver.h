@@ -44,6 +44,14 @@ struct SolverOptions {
   /// Newton steps per iteration while the inequalities' active set changes (its guess from the
   /// multipliers, then its corrections from the linearized constraints after the step).
   int max_active_set_passes = 4;
+  /// The finishing correction: an iterate that is stationary and complementary within the
+  /// tolerances, with the violation over its tolerance by at most `finish_violation` times, is
+  /// first corrected towards feasibility with the last Newton step's factorization,
+  /// Δq = −H⁻¹ μ (J_Eᵀc_E + J_Aᵀc_A) (a second-order correction: the step's own curvature
+  /// residual), which costs a back substitution and an evaluation instead of a Newton matrix and
+  /// its factorization. Kept only if it lowers the violation; the multipliers are not changed.
+  /// 0: never.
+  double finish_violation = 1e3;
   /// Compute the reduced-Hessian statistic after each solve (dense eigen-decomposition,
   /// allocates: for tests and design studies, not for the servo loop).
   bool second_order_check = false;
@@ -71,7 +79,8 @@ struct SolverOptions {
 };
 
 struct SolveStats {
-  int iterations = 0;  ///< Newton iterations
+  int iterations = 0;   ///< Newton iterations
+  int corrections = 0;  ///< finishing corrections kept (SolverOptions::finish_violation)
   double max_violation = 0.0;
   double kkt_residual = 0.0;
   /// Largest constraint value of an inequality row carrying a positive multiplier (a force on
@@ -122,6 +131,11 @@ class Solver {
   explicit Solver(const Problem& problem, const SolverOptions& options = {});
   /// Solves from *q (the previous tick's solution, also least astonishment's q_prev).
   SolveStats Solve(Eigen::VectorXd* q);
+  /// The same problem, least astonishment measured from `anchor` (the previous solution), the
+  /// iterations started from *q: e.g. a prediction along the path the solutions follow. The
+  /// solution is the same as Solve from `anchor` (within the tolerances); only the way there
+  /// differs.
+  SolveStats Solve(Eigen::VectorXd* q, const Eigen::VectorXd& anchor);
   /// Forgets multipliers and penalty (after the constraint set or the goals jump).
   void Reset();
   const SolverOptions& options() const { return options_; }
@@ -182,6 +196,10 @@ class Solver {
   /// @return whether any row was estimated.
   bool LeastSquaresMultipliers(bool need_inequality);
   bool StepWithinTrustRegion() const;
+  /// SolverOptions::finish_violation's correction of *q (ev_, grad_e_ and kkt_ at *q, st's
+  /// residuals its own). Kept (q, ev_, grad_e_, kkt_ and st at the corrected point) only if it
+  /// lowers the violation with finite residuals; otherwise all are as they came.
+  void FinishingCorrection(Eigen::VectorXd* q, SolveStats* st);
   /// Design mode: the BFGS update of B_ with the step from q_old_ to q and the change of the
   /// design gradient (gd_ − gd_old_).
   void UpdateDesignCurvature(const Eigen::VectorXd& q);
@@ -228,6 +246,8 @@ class Solver {
   Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> ls_ldlt_;
   std::vector<char> ls_unknown_;
   double mu_ = 0.0;
+  bool factor_ok_ = false;       ///< the last Newton step left a usable factorization
+  bool kept_jacobians_ = false;  ///< ev_ kept the last step's Jacobians (finishing correction)
   // Design mode only (empty otherwise): the BFGS model of the design objectives' curvature, the
   // design gradient now and at the previous iterate, and that iterate.
   std::vector<IterationRecord>* history_ = nullptr;
