@@ -85,8 +85,8 @@ int main(int argc, char** argv) {
     contacts_max = std::max(contacts_max, snap.num_contacts);
     const bool trace = t >= trace_from && t <= trace_to;
     if (trace) {
-      std::printf("t %.3f it %d viol %.1e |F| %.3f lost %lld solves %lld:", t, r.iterations,
-                  r.violation, f.norm(), static_cast<long long>(r.lost),
+      std::printf("t %.3f it %d viol %.1e kkt %.1e |F| %.3f lost %lld solves %lld:", t,
+                  r.iterations, r.violation, r.kkt, f.norm(), static_cast<long long>(r.lost),
                   static_cast<long long>(r.solves));
       for (int c = 0; c < snap.num_contacts; ++c) {
         const TrackedContact& x = snap.contacts[c];
