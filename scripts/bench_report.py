@@ -43,6 +43,10 @@ def machine():
             f"Linux {platform.release()}; load average {load} when the report was written")
 
 
+# Everything from this line on in the report is measured by hand (bench_report keeps it).
+HAND_MARKER = ("<!-- Measured by hand below: kept as they are when the report above is "
+               "regenerated. -->")
+
 MISSING = []
 
 
@@ -261,8 +265,19 @@ def main():
             "does not depend on the machine's load, so reports from different days compare.\n")
     else:
         MISSING.append("callgrind totals")
+    # The sections measured by hand after the generated ones (the issues' same-session
+    # comparisons against older builds, which no program here reruns) are carried over from the
+    # report being replaced, from their marker on.
+    try:
+        with open(a.out) as f:
+            old = f.read()
+    except OSError:
+        old = ""
+    kept = old[old.find(HAND_MARKER):] if HAND_MARKER in old else ""
     with open(a.out, "w") as f:
         f.write("\n".join(parts))
+        if kept:
+            f.write("\n" + kept)
     if MISSING:
         raise SystemExit(f"bench_report.py: no output from {', '.join(MISSING)} in {a.runs}")
 
