@@ -7,6 +7,7 @@
 //   ./build/bench/chain_soak [--seconds 150] [--from 0]   (print seconds from)
 //                            [--trace-from T --trace-to T]  (every device step's contacts)
 //                            [--lines] [--reach]  (ServoOptions::line_contacts, step_reach)
+//                            [--iterations N]  (ServoOptions::max_iterations, default 10)
 
 #include <cmath>
 #include <cstdio>
@@ -36,6 +37,8 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
     if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
+    if (!std::strcmp(argv[i], "--iterations") && i + 1 < argc)
+      options.max_iterations = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--enter") && i + 1 < argc)
       options.line.enter = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--leave") && i + 1 < argc)
