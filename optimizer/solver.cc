@@ -538,7 +538,8 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
   lambda_i_start_ = lambda_i_;
   factor_ok_ = kept_jacobians_ = false;
   if (!AllFinite(q) ||
-      (&anchor != q_io && (anchor.size() != n_ || !AllFinite(anchor)))) {  // (anchor: as q)
+      // (Solve(&q) passes q as its own anchor: checked already.)
+      (&anchor != q_io && (anchor.size() != n_ || !AllFinite(anchor)))) {
     return InvalidInput(&q, SolveStats{});
   }
   q_prev_ = anchor;

@@ -128,20 +128,31 @@ TEST(SolverTest, FourBarDragKeepsJointsExactOverAThousandWarmSolves) {
   EXPECT_EQ(allocations, 0);
 }
 
+// Two problems of the four-bar drag, each with its own goal handle, for two solvers compared
+// step by step along the path.
+struct TwoFourBarDrags {
+  testing::FourBar fb;
+  std::shared_ptr<PositionGoalTerm> goal_first, goal_second;
+  const Problem first = fb.MakeProblem(testing::FourBar::PathPoint(0), &goal_first);
+  const Problem second = fb.MakeProblem(testing::FourBar::PathPoint(0), &goal_second);
+  /// Both solvers' goals to path step k.
+  void Target(Solver* a, Solver* b, int k) const {
+    SetGoalTarget(a->data(), *goal_first, testing::FourBar::PathPoint(k));
+    SetGoalTarget(b->data(), *goal_second, testing::FourBar::PathPoint(k));
+  }
+};
+
 // The finishing correction (SolverOptions::finish_violation): where the second Newton step of a
 // warm solve leaves only the second-order violation of its own step (1–2.4e-10 against the
 // 1e-10 tolerance, stationary to 1e-11), a back substitution with that step's factorization
 // replaces the third Newton step. The same solutions as without it, two Newton steps instead of
 // 2.6 on average.
 TEST(SolverTest, TheFinishingCorrectionReplacesTheFourBarsThirdNewtonStep) {
-  testing::FourBar fb;
-  std::shared_ptr<PositionGoalTerm> goal_with, goal_without;
-  const Problem with_p = fb.MakeProblem(testing::FourBar::PathPoint(0), &goal_with);
-  const Problem without_p = fb.MakeProblem(testing::FourBar::PathPoint(0), &goal_without);
+  TwoFourBarDrags drags;
   SolverOptions off;
   off.finish_violation = 0.0;
-  Solver with(with_p), without(without_p, off);
-  Eigen::VectorXd q = fb.mechanism.InitialCoordinates();
+  Solver with(drags.first), without(drags.second, off);
+  Eigen::VectorXd q = drags.fb.mechanism.InitialCoordinates();
   ASSERT_TRUE(with.Solve(&q).converged);
   Eigen::VectorXd r = q;
   ASSERT_TRUE(without.Solve(&r).converged);
@@ -149,8 +160,7 @@ TEST(SolverTest, TheFinishingCorrectionReplacesTheFourBarsThirdNewtonStep) {
   double worst = 0.0, worst_kkt = 0.0, apart = 0.0;
   const long allocations_before = tangent::testing::AllocationCount();
   for (int k = 1; k <= 300; ++k) {
-    SetGoalTarget(with.data(), *goal_with, testing::FourBar::PathPoint(k));
-    SetGoalTarget(without.data(), *goal_without, testing::FourBar::PathPoint(k));
+    drags.Target(&with, &without, k);
     const SolveStats a = with.Solve(&q);
     const SolveStats b = without.Solve(&r);
     ASSERT_TRUE(a.converged) << "step " << k;
@@ -183,18 +193,14 @@ TEST(SolverTest, TheFinishingCorrectionReplacesTheFourBarsThirdNewtonStep) {
 // prediction along the path (2 x_k − x_{k−1}), it reaches the solution the plain solve reaches
 // from the anchor.
 TEST(SolverTest, AnAnchoredSolveFromAPredictionReachesTheSameSolution) {
-  testing::FourBar fb;
-  std::shared_ptr<PositionGoalTerm> goal_p, goal_r;
-  const Problem pp = fb.MakeProblem(testing::FourBar::PathPoint(0), &goal_p);
-  const Problem pr = fb.MakeProblem(testing::FourBar::PathPoint(0), &goal_r);
-  Solver predicted(pp), plain(pr);
-  Eigen::VectorXd q = fb.mechanism.InitialCoordinates();
+  TwoFourBarDrags drags;
+  Solver predicted(drags.first), plain(drags.second);
+  Eigen::VectorXd q = drags.fb.mechanism.InitialCoordinates();
   ASSERT_TRUE(predicted.Solve(&q).converged);
   Eigen::VectorXd previous = q;
   double apart = 0.0;
   for (int k = 1; k <= 100; ++k) {
-    SetGoalTarget(predicted.data(), *goal_p, testing::FourBar::PathPoint(k));
-    SetGoalTarget(plain.data(), *goal_r, testing::FourBar::PathPoint(k));
+    drags.Target(&predicted, &plain, k);
     Eigen::VectorXd x = 2.0 * q - previous;
     for (int o = 0; o < x.size(); o += 7) x.segment<4>(o + 3).normalize();
     Eigen::VectorXd reference = q;
