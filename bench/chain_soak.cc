@@ -2,7 +2,9 @@
 // device with its driver watchdog and the global stage stepped in one thread along the looped
 // "drag" trajectory, deterministic. Prints, per simulated second: contacts, mean |F| at the hand,
 // events; and when the chain comes apart (the force at the hand stays below 0.02 N for a whole
-// circle while the drag pulls).
+// circle while the drag pulls) or is held only by an unresolved penetration (a tick's constraint
+// violation above issue 33's 1e-6 m: the solve jammed, as with the step reach on from 140 s).
+// Exit status 1 for either.
 //
 //   ./build/bench/chain_soak [--seconds 150] [--from 0]   (print seconds from)
 //                            [--trace-from T --trace-to T]  (every device step's contacts)
@@ -21,6 +23,11 @@
 #include "server/phantom.h"
 #include "server/scene.h"
 #include "server/servo.h"
+
+namespace {
+// Issue 33's bar for every tick of a conformal case.
+constexpr double kHeldViolation = 1e-6;
+}  // namespace
 
 using namespace tangent::server;
 
@@ -59,6 +66,7 @@ int main(int argc, char** argv) {
   double f_sum = 0.0, worst_violation = 0.0;
   int events = 0, contacts_max = 0, quiet = 0;
   bool apart = false;
+  double jammed_at = -1.0, jam_violation = 0.0;
   for (int64_t k = 0; k < static_cast<int64_t>(seconds / dt); ++k) {
     const double t = dt * static_cast<double>(k);
     const Eigen::Vector3d rendered = watchdog.Step(t, dt, wrench, received);
@@ -78,6 +86,12 @@ int main(int argc, char** argv) {
       servo.Tick(&s, now, &r);
       now += 250'000;
       worst_violation = std::max(worst_violation, r.violation);
+      if (jammed_at < 0.0 && r.violation > kHeldViolation) {
+        jammed_at = t;
+        jam_violation = r.violation;
+        std::printf("chain_soak: violation %.1e m at %.3f s (above %.0e m: not held)\n",
+                    r.violation, t, kHeldViolation);
+      }
       if (r.answered) {
         wrench = Eigen::Vector3d(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
         received = t;
@@ -138,6 +152,13 @@ int main(int argc, char** argv) {
       worst_violation = 0.0;
     }
   }
-  std::printf("chain_soak: %s after %.0f s\n", apart ? "APART" : "held", seconds);
-  return apart ? 1 : 0;
+  if (apart) {
+    std::printf("chain_soak: APART after %.0f s\n", seconds);
+  } else if (jammed_at >= 0.0) {
+    std::printf("chain_soak: JAMMED after %.0f s (violation %.1e m from %.3f s)\n", seconds,
+                jam_violation, jammed_at);
+  } else {
+    std::printf("chain_soak: held after %.0f s\n", seconds);
+  }
+  return apart || jammed_at >= 0.0 ? 1 : 0;
 }

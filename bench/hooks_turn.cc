@@ -2,13 +2,16 @@
 // deterministic (docs/reliability.md, "Soak"): the paperclip soak's failure in seconds instead of
 // minutes. Two wire rings hooked through each other (testing/conformal_scenes.h, kHooksScene);
 // the hand (6-DOF) pulls the free ring 2 mm away from 1 s, then from 3 s turns it about the line
-// between the rings' centres (their contact normal), ±40° over 8 s. At 14.5° the one contact
+// between the rings' centres (their contact normal), ±40° in a sine of 8 s period (at most
+// 31.4°/s; --period sets it). At 14.5° the one contact
 // point becomes a saddle with a minimum either side (the pitchfork). Prints every quarter second
 // and when the rings come apart (the hand's pull below 0.02 N, the ring more than 1 mm from
 // where the other holds it); exit status 1 when they do.
 //
 //   ./build/bench/hooks_turn [--seconds 11] [--lines] [--reach]
 //                            (ServoOptions::line_contacts, step_reach)
+//                            [--period 8] (s, the turn's; its peak rate is 40° × 2π / period)
+//                            [--pass-every 1] (device steps, 1 ms each, between global passes)
 //                            [--trace-from T] (every 10th device step's contacts and sections)
 
 #include <cmath>
@@ -28,7 +31,8 @@
 using namespace tangent::server;
 
 int main(int argc, char** argv) {
-  double seconds = 11.0, trace_from = 1e9;
+  double seconds = 11.0, trace_from = 1e9, period = 8.0;
+  int pass_every = 1;
   ServoOptions options;
   options.dof = 6;
   for (int i = 1; i < argc; ++i) {
@@ -36,6 +40,12 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--trace-from") && i + 1 < argc) trace_from = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
     if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
+    if (!std::strcmp(argv[i], "--period") && i + 1 < argc) period = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--pass-every") && i + 1 < argc) pass_every = std::atoi(argv[i + 1]);
+  }
+  if (!(period > 0.0) || pass_every < 1) {
+    std::fprintf(stderr, "hooks_turn: --period must be > 0 s and --pass-every >= 1\n");
+    return 2;
   }
   const auto scene = ParseScene(tangent::testing::kHooksScene, "hooks");
   ServoLoop servo(*scene, options);
@@ -46,11 +56,14 @@ int main(int argc, char** argv) {
   int64_t now = 1'000'000'000;
   double worst = 0.0, largest_step = 0.0;
   Eigen::Vector3d last = Eigen::Vector3d::Zero();
-  std::printf("hooks_turn: %.0f s, line contacts %s, step reach %s\n", seconds,
-              options.line_contacts ? "on" : "off", options.step_reach ? "on" : "off");
+  std::printf(
+      "hooks_turn: %.0f s, turn period %.1f s (peak %.1f deg/s), a global pass every %d ms, line "
+      "contacts %s, step reach %s\n",
+      seconds, period, 80 * std::numbers::pi / period, pass_every,
+      options.line_contacts ? "on" : "off", options.step_reach ? "on" : "off");
   for (int step = 1; step <= static_cast<int>(seconds * 1000); ++step) {
     const double t = 1e-3 * step;
-    const DeviceSample s = tangent::bench::HooksHandSample(step, now);
+    const DeviceSample s = tangent::bench::HooksHandSample(step, now, period);
     const double angle = 2 * std::atan2(s.orientation[1], s.orientation[0]);  // (turn about x)
     for (int tick = 0; tick < 4; ++tick) {
       servo.Tick(&s, now, &r);
@@ -58,7 +71,7 @@ int main(int argc, char** argv) {
       worst = std::max(worst, r.violation);
     }
     servo.FillSnapshot(&snap);
-    link.PassInto(&servo, snap);
+    if (step % pass_every == 0) link.PassInto(&servo, snap);
     const Eigen::Vector3d f(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
     largest_step = std::max(largest_step, (f - last).norm());
     last = f;

@@ -39,13 +39,15 @@ inline server::DeviceSample HandSample(
 
 /// The hand of issue 33's fourth canonical case (testing/conformal_scenes.h, kHooksScene): at
 /// rest for 1 s, pulling 2 mm along +x over the next second, then from 3 s turning about x,
-/// ±40° in a sine of 16 s period. Device state `seq` (1 kHz: t = seq ms), received at now_ns.
-inline server::DeviceSample HooksHandSample(int64_t seq, int64_t now_ns) {
+/// ±40° in a sine of `period` s (8 s: at most 31.4°/s). Device state `seq` (1 kHz: t = seq ms),
+/// received at now_ns.
+inline server::DeviceSample HooksHandSample(int64_t seq, int64_t now_ns, double period = 8.0) {
   const double t = 1e-3 * static_cast<double>(seq);
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   if (t > 1.0) p.x() = 2e-3 * std::min(1.0, t - 1.0);
   const double angle =
-      t > 3.0 ? (40 * std::numbers::pi / 180) * std::sin(std::numbers::pi * (t - 3.0) / 4.0) : 0.0;
+      t > 3.0 ? (40 * std::numbers::pi / 180) * std::sin(2 * std::numbers::pi * (t - 3.0) / period)
+              : 0.0;
   return HandSample(seq, now_ns, p,
                     Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX())));
 }
