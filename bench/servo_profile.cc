@@ -6,7 +6,8 @@
 // gap of a contact carrying force). Deterministic apart from the clock: the figures to compare
 // solver changes by; server_rate is the threaded test of the targets.
 //
-//   ./build/bench/servo_profile [--steps 8000] [--iterations 10] [--kkt 1e-8]
+//   ./build/bench/servo_profile [--steps 8000] [--iterations 10] [--kkt 1e-8] [--lines]
+//   (--lines: ServoOptions::line_contacts, off by default: what line contacts cost the drag)
 //
 // Under callgrind (scripts/bench_report.sh) run with --instr-atstart=no: the program starts the
 // instrumentation itself once the scene is loaded, which callgrind otherwise runs some 35x slower
@@ -37,11 +38,17 @@ using namespace tangent::server;
 int main(int argc, char** argv) {
   int steps = 8000, lag = 0;
   ServoOptions so;
-  for (int i = 1; i + 1 < argc; i += 2) {
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--lines")) {
+      so.line_contacts = true;
+      continue;
+    }
+    if (i + 1 == argc) break;
     if (!std::strcmp(argv[i], "--steps")) steps = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--iterations")) so.max_iterations = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--kkt")) so.kkt_tolerance = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--lag")) lag = std::atoi(argv[i + 1]);
+    ++i;
   }
   auto scene = LoadScene(std::string(TANGENT_SCENES_DIR) + "/paperclips.json");
   ServoLoop servo(*scene, so);

@@ -50,9 +50,10 @@ struct ServoOptions {
   optimizer::ContactTracking tracking;
   /// Line contacts (server/line_contacts.h): a nearly conformal contact of a declared pair of
   /// untrimmed surfaces is held by three sections across its line instead of its one point.
-  /// Off by default: on the paperclip soak it holds the chain to 566 s instead of 139 s, but
-  /// the figure moves between 136 and 566 s with the thresholds, and the paperclips' tick costs
-  /// 1.37x the instructions (docs/reliability.md, "Soak").
+  /// Off by default: on the paperclip soak it holds the chain to 264 s instead of 139 s, but
+  /// the figure moves between 74 and 566 s with the thresholds and the build, and the hooks'
+  /// turn (bench/hooks_turn) comes apart with it; the paperclips' tick costs 1.19x the
+  /// instructions (`servo_profile --lines`; docs/reliability.md, "Soak").
   bool line_contacts = false;
   LineContactOptions line;
   /// Face contacts (server/face_contacts.h): a declared pair of two untrimmed flat faces is held
