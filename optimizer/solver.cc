@@ -488,7 +488,7 @@ void Solver::FinishingCorrection(Eigen::VectorXd* q, SolveStats* st) {
   for (int i = 0; i < ev_.c_i().size(); ++i) jstep_i_[i] = active_[i] ? ev_.c_i()[i] : 0.0;
   ev_.AddKeptJacobianTransposeTimes(ProblemEvaluator::kInequality, jstep_i_, mu_, &g_);
   SolveStep();
-  if (step_.allFinite()) {
+  if (AllFinite(step_)) {
     q_try_ = *q + step_;
     Normalize(&q_try_);
     ev_.Evaluate(q_try_);
