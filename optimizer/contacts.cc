@@ -131,7 +131,8 @@ std::unique_ptr<TermState> SurfaceContactTerm::MakeState() const {
 void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) const {
   const BodyPose& pf = PoseOf(poses, body_f_);
   const BodyPose& pg = PoseOf(poses, body_g_);
-  if (st->valid && SamePose(pf.q, st->q_f) && SamePose(pg.q, st->q_g)) return;
+  if (st->anchor.Stands(st->valid, pf.q, st->q_f, pg.q, st->q_g)) return;
+  st->anchor.rewound = false;
   bool done = false;
   if (st->tracking) {
     st->track_status = st->tracker.Step(pf.q, pg.q);
@@ -323,7 +324,8 @@ std::unique_ptr<TermState> PointOnSurfaceTerm::MakeState() const {
 void PointOnSurfaceTerm::Update(const std::vector<BodyPose>& poses, State* st) const {
   const BodyPose& pa = PoseOf(poses, point_.body);
   const BodyPose& ps = PoseOf(poses, body_s_);
-  if (st->valid && SamePose(pa.q, st->q_a) && SamePose(ps.q, st->q_s)) return;
+  if (st->anchor.Stands(st->valid, pa.q, st->q_a, ps.q, st->q_s)) return;
+  st->anchor.rewound = false;
   st->ext = contact::SolvePointSurface(pa.Point(point_.point), *s_, ps, st->u, {}, &st->eval);
   st->u = st->ext.u;
   st->q_a = pa.q;

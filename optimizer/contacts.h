@@ -101,6 +101,14 @@ class SurfaceContactTerm final : public Term {
     contact::TrackStatus track_status = contact::TrackStatus::kLost;  ///< the last step's
     Vector7d q_f, q_g;  ///< poses of the last evaluation
     bool valid = false;
+    /// The line search's base point (TermState::Anchor): the next evaluation after Rewind
+    /// solves afresh from its parameters, with the jump and undecided rules against them.
+    FollowAnchor<Eigen::Vector4d> anchor;
+    void Anchor() override { anchor.Keep(u, q_f, q_g, valid); }
+    void Rewind() override {
+      anchor.Restore(&u, &q_f, &q_g, &valid);
+      tracking = false;
+    }
     contact::SurfaceSurfaceExtremum ext;
     contact::SurfacePairEval eval;
     const contact::SurfaceSurfaceExtremum& extremum() const override { return ext; }
@@ -170,6 +178,9 @@ class PointOnSurfaceTerm final : public Term {
     Eigen::Vector2d u;
     Vector7d q_a, q_s;
     bool valid = false;
+    FollowAnchor<Eigen::Vector2d> anchor;  ///< the line search's base point (TermState::Anchor)
+    void Anchor() override { anchor.Keep(u, q_a, q_s, valid); }
+    void Rewind() override { anchor.Restore(&u, &q_a, &q_s, &valid); }
     contact::PointSurfaceExtremum ext;
     contact::PlacedSurfacePoint eval;
     const contact::PointSurfaceExtremum& extremum() const { return ext; }

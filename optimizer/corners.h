@@ -36,6 +36,8 @@ class CornerContactTerm final : public Term {
       point.valid = false;
     }
     void Deactivate() { active = false; }
+    void Anchor() override { point.Anchor(); }
+    void Rewind() override { point.Rewind(); }
   };
 
   /// `corner` is the corner's point on its body; `seed` where its closest point on `surface` is

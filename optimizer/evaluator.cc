@@ -386,4 +386,21 @@ void TermHessian::Fold(const Eigen::Vector4d& Q_a, const Eigen::Vector4d& Q_b) {
   W_b.setZero();
 }
 
+void ProblemEvaluator::AnchorStates() {
+  // (An idle row, a free contact slot, stays idle through a solve: nothing to keep.)
+  for (const auto& kind : items_) {
+    for (const Item& it : kind) {
+      if (it.state && !it.idle) it.state->Anchor();
+    }
+  }
+}
+
+void ProblemEvaluator::RewindStates() {
+  for (const auto& kind : items_) {
+    for (const Item& it : kind) {
+      if (it.state && !it.idle) it.state->Rewind();
+    }
+  }
+}
+
 }  // namespace tangent::optimizer

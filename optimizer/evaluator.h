@@ -75,6 +75,10 @@ class ProblemEvaluator {
   void AddCurvature(const std::vector<Problem::Entry>& list, const Eigen::VectorXd& weights,
                     Eigen::MatrixXd* H);
 
+  /// TermState::Anchor / Rewind on every state (the line search's base point).
+  void AnchorStates();
+  void RewindStates();
+
   const Problem& problem() const { return problem_; }
   /// The terms' per-solve states (contacts' tracked parameters, goal targets).
   ProblemData& data() { return data_; }

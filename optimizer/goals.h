@@ -107,6 +107,12 @@ TermPtr Shifted(TermPtr term, const Eigen::VectorXd& rhs);
 struct ShiftedState final : TermState {
   std::unique_ptr<TermState> inner;  ///< r's state (nullptr for a stateless r)
   Eigen::VectorXd rhs;
+  void Anchor() override {
+    if (inner) inner->Anchor();
+  }
+  void Rewind() override {
+    if (inner) inner->Rewind();
+  }
 };
 
 }  // namespace tangent::optimizer

@@ -64,6 +64,42 @@ struct TermHessian {
 class TermState {
  public:
   virtual ~TermState() = default;
+  /// The line search's base point: what Rewind returns to. A state that follows something
+  /// along the poses (a contact's tracked extremum) keeps where it stood there; a trial point
+  /// the line search rejects must not be where the next, shorter trial starts from.
+  virtual void Anchor() {}
+  virtual void Rewind() {}
+};
+
+/// What a state that follows an extremum along the poses keeps at the line search's base point
+/// (TermState::Anchor): its parameters, the two poses it was evaluated at and whether it was.
+/// Restore puts them back and marks the state `rewound`: its cached answer is a rejected
+/// trial's, so its next Update solves afresh (from the base point's parameters) whatever the
+/// poses.
+template <class Params>
+struct FollowAnchor {
+  Params u{};
+  Vector7d q_a = Vector7d::Zero(), q_b = Vector7d::Zero();
+  bool valid = false;
+  bool rewound = false;
+  void Keep(const Params& u_in, const Vector7d& qa, const Vector7d& qb, bool valid_in) {
+    u = u_in;
+    q_a = qa;
+    q_b = qb;
+    valid = valid_in;
+  }
+  void Restore(Params* u_out, Vector7d* qa, Vector7d* qb, bool* valid_out) {
+    *u_out = u;
+    *qa = q_a;
+    *qb = q_b;
+    *valid_out = valid;
+    rewound = true;
+  }
+  /// Whether the state's last answer stands for poses (a, b) (and the next Update may skip).
+  bool Stands(bool valid_now, const Vector7d& a, const Vector7d& a_then, const Vector7d& b,
+              const Vector7d& b_then) const {
+    return valid_now && !rewound && SamePose(a, a_then) && SamePose(b, b_then);
+  }
 };
 
 /// A smooth vector function r(q) of the poses of at most two bodies, with its Jacobian in two

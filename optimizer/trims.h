@@ -50,6 +50,17 @@ class TrimConstraintTerm final : public Term {
     Eigen::Vector3d edge;  ///< the edge's tracked (s, t, τ): g's parameters, then the curve's
     Vector7d q_a, q_b;
     bool valid = false;
+    /// The line search's base point (TermState::Anchor): the pair's, and the edge's here.
+    FollowAnchor<Eigen::Vector4d> anchor;
+    Eigen::Vector3d edge_anchor = Eigen::Vector3d::Zero();
+    void Anchor() override {
+      anchor.Keep(pair, q_a, q_b, valid);
+      edge_anchor = edge;
+    }
+    void Rewind() override {
+      anchor.Restore(&pair, &q_a, &q_b, &valid);
+      edge = edge_anchor;
+    }
     contact::SurfaceSurfaceExtremum pair_ext;
     contact::SurfacePairEval pair_eval;
     contact::CurveSurfaceExtremum edge_ext;
@@ -116,6 +127,20 @@ class TrimmedContactTerm final : public Term {
     contact::SurfaceSurfaceExtremum reported;
     SurfaceContactTerm::State& face() const {
       return static_cast<SurfaceContactTerm::State&>(*face_state);
+    }
+    /// The line search's base point (TermState::Anchor): the measure followed and the face
+    /// contact's (the material memos give the same answer either way).
+    FollowAnchor<contact::TrimmedMeasure> anchor;  ///< with the measure followed
+    bool seeded_anchor = false;
+    void Anchor() override {
+      face_state->Anchor();
+      anchor.Keep(measure, q_a, q_b, valid);
+      seeded_anchor = seeded;
+    }
+    void Rewind() override {
+      face_state->Rewind();
+      anchor.Restore(&measure, &q_a, &q_b, &valid);
+      seeded = seeded_anchor;
     }
     const contact::SurfaceSurfaceExtremum& extremum() const override { return reported; }
     void Reseed(const Eigen::Vector4d& u_new) override {
