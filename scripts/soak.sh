@@ -9,7 +9,8 @@
 #   * no counter drifting: 0 faults, 0 device timeouts, 0 wrenches over the limits, the answered
 #     fraction, the loop rate and the tick p99 of the last minute within 10 % / 25 % of the first;
 #   * the violation and force statistics of the last minute the same as the first's (max
-#     violation below 1e-9 m in both; mean |F| within 10 %: the trajectory repeats exactly).
+#     violation below 1e-9 m in both; mean |F| within 10 %: the trajectory repeats exactly), and
+#     no contact the global stage added deeper than 1e-6 m (a penetration the rows missed);
 #   * the accounting closes by counter (scripts/lib/accounting.sh), and (throughput) ≥ 95 % of
 #     the accepted states were answered.
 # Writes build/soak/ (logs, rss.csv, report.md). A short run (--minutes 0.5) is ctest's
@@ -112,6 +113,10 @@ checks = [
     ("device states accepted per second: last within 10 % of first", abs(last["accepted_per_s"] / first["accepted_per_s"] - 1) <= 0.10,
      f'{first["accepted_per_s"]:.0f} → {last["accepted_per_s"]:.0f} /s'),
     ("max violation below 1e-9 m in both", first["violation"] < 1e-9 and last["violation"] < 1e-9, f'{first["violation"]:.1e} → {last["violation"]:.1e} m'),
+    # The violation above is the servo's rows'; a row held off its extremum can read ~0 while its
+    # pair interpenetrates beside it. The global stage measures every contact it adds.
+    ("no contact the global stage added deeper than 1e-6 m", float(server["stage_deepest_added_m"]) >= -1e-6,
+     f'smallest β of a contact added {float(server["stage_deepest_added_m"]):.1e} m'),
     ("mean |F|: last within 10 % of first", abs(last["force"] - first["force"]) <= 0.10 * first["force"] + 0.01, f'{first["force"]:.3f} → {last["force"]:.3f} N'),
 ]
 lines = [f"Soak: {minutes:g} min of the looped drag on the paperclips; windows of {window:.0f} s "

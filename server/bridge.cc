@@ -396,6 +396,7 @@ std::string Bridge::Impl::Report() const {
     << "\nglobal_longest_gap_ms=" << engine_->global_longest_gap_ms()
     << "\nglobal_pass_p50_us=" << DurationHistogram::Quantile(g.data(), 0.5)
     << "\nglobal_pass_max_us=" << engine_->global_histogram().max()
+    << "\nstage_deepest_added_m=" << engine_->stage_deepest_added()
     << "\ncontact_events=" << c.events_applied << "\nevents_dropped=" << c.events_dropped
     << "\ncontacts_tracked=" << c.contacts_tracked << "\ncontacts_solved=" << c.contacts_solved
     << "\ncontacts_lost=" << c.contacts_lost << "\npings_answered=" << b.pings;

@@ -395,6 +395,7 @@ void Engine::GlobalThread() {
         if (events_.Push(m)) events_pushed_.fetch_add(1);
       });
       clearances_.Write(link.clearances());
+      stage_deepest_added_.store(link.deepest_added(), std::memory_order_relaxed);
       global_.Add(1e-3 * static_cast<double>(MonotonicNs() - t0));
       global_passes_.fetch_add(1, std::memory_order_relaxed);
     }

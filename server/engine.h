@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <thread>
 
@@ -162,6 +163,11 @@ class Engine {
   double global_longest_gap_ms() const {
     return 1e-6 * static_cast<double>(global_longest_gap_ns_.load(std::memory_order_relaxed));
   }
+  /// The smallest β of any contact the global stage added (GlobalLink::deepest_added; +∞ before
+  /// the first): a penetration the servo's rows missed shows here.
+  double stage_deepest_added() const {
+    return stage_deepest_added_.load(std::memory_order_relaxed);
+  }
   /// Fault injection: the global stage's next pass starts injected_global_stall_ms late. A
   /// lock-free atomic store, so a signal handler may call it.
   void InjectGlobalStall() { inject_global_stall_.store(true, std::memory_order_relaxed); }
@@ -200,6 +206,7 @@ class Engine {
   std::atomic<int64_t> global_passes_{0};
   std::atomic<int64_t> global_stalls_{0};
   std::atomic<int64_t> global_longest_gap_ns_{0};
+  std::atomic<double> stage_deepest_added_{std::numeric_limits<double>::infinity()};
   std::atomic<bool> inject_global_stall_{false};
   static_assert(std::atomic<bool>::is_always_lock_free);
   std::atomic<int64_t> events_pushed_{0};

@@ -5,6 +5,8 @@
 // certificate of the pairs it left apart (contact/clearance.h). The engine's global thread, the
 // servo tests and the servo benchmark all drive the stage through it.
 
+#include <algorithm>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -30,7 +32,12 @@ class GlobalLink {
   int Pass(const Snapshot& snapshot, Emit&& emit) {
     ToGlobalInput(snapshot, &poses_, &tracked_);
     stage_.Run(poses_, tracked_, &events_);
-    for (const contact::ContactEvent& e : events_) emit(ToEventMsg(e));
+    for (const contact::ContactEvent& e : events_) {
+      if (e.kind == contact::ContactEvent::Kind::kAdded) {
+        deepest_added_ = std::min(deepest_added_, e.contact.beta);
+      }
+      emit(ToEventMsg(e));
+    }
     Certify(snapshot);
     return static_cast<int>(events_.size());
   }
@@ -50,6 +57,11 @@ class GlobalLink {
   }
   /// The last pass's certificate (for ServoLoop::AdoptClearances).
   const ClearanceMsg& clearances() const { return clearances_; }
+  /// The smallest β of any contact the stage added, measured at its pass's snapshot (+∞ before
+  /// the first). The servo's rows report their own β, and a row held off its extremum can read
+  /// ~0 while its pair interpenetrates beside it; a contact added this deep is that penetration,
+  /// found (docs/reliability.md, "Soak").
+  double deepest_added() const { return deepest_added_; }
 
  private:
   /// The certificate at the snapshot's poses, leaving out the surface pairs in contact: those
@@ -63,6 +75,7 @@ class GlobalLink {
   std::vector<contact::ContactEvent> events_;
   std::vector<double> clearance_;
   ClearanceMsg clearances_;
+  double deepest_added_ = std::numeric_limits<double>::infinity();
 };
 
 }  // namespace tangent::server
