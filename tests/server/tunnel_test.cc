@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <thread>
 
 #include "server/engine.h"
@@ -129,6 +130,42 @@ TEST(TunnelTest, WithoutTheGuardTheSameStepTunnels) {
   const Outcome off = Drive(false);
   EXPECT_LT(off.final_lowest + 2 * 5e-3, -1e-3);  // its top below the sheet
   EXPECT_EQ(off.contacts, 0);
+}
+
+TEST(TunnelTest, TheStageMeasuresThePenetrationOfAContactItAdds) {
+  // GlobalLink::deepest_added, what chain_soak and soak.sh judge when the servo's rows read
+  // ~0 (docs/reliability.md, "Soak"): without the guard the ball is carried into the sheet, and a
+  // pass taken then adds the contact at its depth, the ball's lowest point below the sheet
+  // (0.25 mm: the first servo tick below it). A pass first taken 1.75 mm in or deeper adds
+  // nothing (measured at every device step from there to 17 mm): such a crossing is not a
+  // contact the stage reports.
+  const auto scene = ParseScene(kBallOverSheet, "ball_over_sheet.json");
+  ServoOptions options;
+  options.clearance_guard = false;
+  ServoLoop servo(*scene, options);
+  GlobalLink link(servo);
+  EXPECT_EQ(link.deepest_added(), std::numeric_limits<double>::infinity());
+  const int ball = scene->BodyIndex("ball");
+  TickResult r;
+  Snapshot snap;
+  int64_t now = 1'000'000'000;
+  int added = 0;
+  double lowest = 1.0;
+  for (int k = 1; k <= 20 && added == 0; ++k) {
+    const DeviceSample s = bench::HandSample(k, now, Eigen::Vector3d(0, 0, -30e-3));
+    for (int tick = 0; tick < 4 && added == 0; ++tick) {
+      servo.Tick(&s, now, &r);
+      now += 250'000;
+      servo.FillSnapshot(&snap);
+      lowest = snap.q[ball][2] - 5e-3;
+      if (lowest < 0.0) {  // into the sheet: the stage looks
+        link.PassInto(&servo, snap, [&](const ContactEventMsg& m, bool) { added += m.added; });
+      }
+    }
+  }
+  ASSERT_GE(added, 1);
+  EXPECT_LT(lowest, -1e-6);
+  EXPECT_NEAR(link.deepest_added(), lowest, 1e-9);
 }
 
 TEST(TunnelTest, TheEnginesThreadsHoldTheBallOffTheSheetThroughAStalledStage) {
