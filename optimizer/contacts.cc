@@ -132,7 +132,6 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   const BodyPose& pf = PoseOf(poses, body_f_);
   const BodyPose& pg = PoseOf(poses, body_g_);
   if (st->anchor.Stands(st->valid, pf.q, st->q_f, pg.q, st->q_g)) return;
-  st->anchor.rewound = false;
   bool done = false;
   if (st->tracking) {
     st->track_status = st->tracker.Step(pf.q, pg.q);
@@ -325,7 +324,6 @@ void PointOnSurfaceTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   const BodyPose& pa = PoseOf(poses, point_.body);
   const BodyPose& ps = PoseOf(poses, body_s_);
   if (st->anchor.Stands(st->valid, pa.q, st->q_a, ps.q, st->q_s)) return;
-  st->anchor.rewound = false;
   st->ext = contact::SolvePointSurface(pa.Point(point_.point), *s_, ps, st->u, {}, &st->eval);
   st->u = st->ext.u;
   st->q_a = pa.q;

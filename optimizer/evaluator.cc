@@ -386,19 +386,11 @@ void TermHessian::Fold(const Eigen::Vector4d& Q_a, const Eigen::Vector4d& Q_b) {
   W_b.setZero();
 }
 
-void ProblemEvaluator::AnchorStates() {
+void ProblemEvaluator::ForEachBusyState(void (TermState::*f)()) {
   // (An idle row, a free contact slot, stays idle through a solve: nothing to keep.)
   for (const auto& kind : items_) {
     for (const Item& it : kind) {
-      if (it.state && !it.idle) it.state->Anchor();
-    }
-  }
-}
-
-void ProblemEvaluator::RewindStates() {
-  for (const auto& kind : items_) {
-    for (const Item& it : kind) {
-      if (it.state && !it.idle) it.state->Rewind();
+      if (it.state && !it.idle) (it.state->*f)();
     }
   }
 }

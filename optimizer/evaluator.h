@@ -75,9 +75,9 @@ class ProblemEvaluator {
   void AddCurvature(const std::vector<Problem::Entry>& list, const Eigen::VectorXd& weights,
                     Eigen::MatrixXd* H);
 
-  /// TermState::Anchor / Rewind on every state (the line search's base point).
-  void AnchorStates();
-  void RewindStates();
+  /// TermState::Anchor / Rewind on every state of a row in use (a trial's base point).
+  void AnchorStates() { ForEachBusyState(&TermState::Anchor); }
+  void RewindStates() { ForEachBusyState(&TermState::Rewind); }
 
   const Problem& problem() const { return problem_; }
   /// The terms' per-solve states (contacts' tracked parameters, goal targets).
@@ -119,6 +119,7 @@ class ProblemEvaluator {
   std::array<JacobianRows, 3> kept_a_, kept_b_;  ///< KeepJacobians (objective rows unused)
   std::array<Eigen::MatrixXd, 3> dense_;
   void EvaluateKinds(const Eigen::VectorXd& q, int first, int last);
+  void ForEachBusyState(void (TermState::*f)());
   std::vector<Eigen::Matrix3d> rotation_weights_;  // per moving block
   bool rotations_pending_ = false;
 };

@@ -23,7 +23,6 @@ void SectionContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   const BodyPose& pa = PoseOf(poses, body_f_);
   const BodyPose& pb = PoseOf(poses, body_g_);
   if (st->anchor.Stands(st->valid, pa.q, st->q_a, pb.q, st->q_b)) return;
-  st->anchor.rewound = false;
   const contact::BodyCurve line = contact::BodyCurve::Isoline(f_, st->fixed, st->value);
   // Followed from its last extremum: a section is a local constraint, its neighbourhood is the
   // contact's own (contact::kContinuation).

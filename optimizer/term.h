@@ -95,10 +95,13 @@ struct FollowAnchor {
     *valid_out = valid;
     rewound = true;
   }
-  /// Whether the state's last answer stands for poses (a, b) (and the next Update may skip).
+  /// Whether the state's last answer stands for poses (a, b), so that Update may return it;
+  /// when not, Update solves afresh and the rewound mark is spent.
   bool Stands(bool valid_now, const Vector7d& a, const Vector7d& a_then, const Vector7d& b,
-              const Vector7d& b_then) const {
-    return valid_now && !rewound && SamePose(a, a_then) && SamePose(b, b_then);
+              const Vector7d& b_then) {
+    if (valid_now && !rewound && SamePose(a, a_then) && SamePose(b, b_then)) return true;
+    rewound = false;
+    return false;
   }
 };
 

@@ -60,7 +60,6 @@ void TrimConstraintTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   const BodyPose& pa = PoseOf(poses, body_a_);
   const BodyPose& pb = PoseOf(poses, body_b_);
   if (st->anchor.Stands(st->valid, pa.q, st->q_a, pb.q, st->q_b)) return;
-  st->anchor.rewound = false;
   // Both extrema followed from their last parameters (the contact's pair: f against g; the
   // edge: g against the curve f(c(τ)), the curve–surface solver's order).
   st->pair_ext = contact::SolveSurfaceSurface(*f_, pa, *g_, pb, st->pair, contact::kContinuation,
@@ -173,7 +172,6 @@ void TrimmedContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
   const BodyPose& pa = PoseOf(poses, body_a_);
   const BodyPose& pb = PoseOf(poses, body_b_);
   if (st->anchor.Stands(st->valid, pa.q, st->q_a, pb.q, st->q_b)) return;
-  st->anchor.rewound = false;
   SurfaceContactTerm::State& face = st->face();
   face.active = true;
   // The edges are followed from the last measure while the contact keeps its form and loops
