@@ -488,7 +488,6 @@ void Solver::FinishingCorrection(Eigen::VectorXd* q, SolveStats* st) {
   for (int i = 0; i < ev_.c_i().size(); ++i) jstep_i_[i] = active_[i] ? ev_.c_i()[i] : 0.0;
   ev_.AddKeptJacobianTransposeTimes(ProblemEvaluator::kInequality, jstep_i_, mu_, &g_);
   SolveStep();
-  ev_.AnchorStates();  // (a rejected correction's contacts are not where q's continue from)
   if (AllFinite(step_)) {
     q_try_ = *q + step_;
     Normalize(&q_try_);
@@ -509,7 +508,6 @@ void Solver::FinishingCorrection(Eigen::VectorXd* q, SolveStats* st) {
     }
   }
   // Not kept: everything back at q.
-  ev_.RewindStates();
   ev_.Evaluate(*q);
   ev_.ObjectiveGradient(*q, q_prev_, M_, &grad_e_);
   KktResidual(&kkt_);
