@@ -12,6 +12,7 @@
 //                            [--lines] [--reach]  (ServoOptions::line_contacts, step_reach)
 //                            [--iterations N]  (ServoOptions::max_iterations, default 10)
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -54,6 +55,13 @@ int main(int argc, char** argv) {
   }
   ServoLoop servo(*scene, options);
   GlobalLink link(servo);
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    const int built = link.Prepare();  // (as tangentd does before it serves)
+    std::fprintf(
+        stderr, "chain_soak: %d clearance trees built in %.0f ms\n", built,
+        1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
   HandTrajectory hand = HandTrajectory::BuiltIn("drag");
   hand.LoopFrom(3.0);
   DeviceModel device;

@@ -105,6 +105,30 @@ struct ClearanceCertifier::Impl {
   }
 };
 
+int ClearanceCertifier::BuildAll() {
+  Impl& m = *impl_;
+  // The surfaces a certificate may measure: every watched surface of a pair of bodies declared
+  // as a whole, and both of each declared surface pair.
+  std::vector<char> needed(m.surfaces.size(), 0);
+  for (size_t k = 0; k < body_pairs_.size(); ++k) {
+    if (m.whole[k]) {
+      for (int body : {body_pairs_[k].first, body_pairs_[k].second}) {
+        for (int s : m.by_body[static_cast<size_t>(body)]) needed[static_cast<size_t>(s)] = 1;
+      }
+    }
+    for (const auto& [a, b] : m.declared[k]) {
+      needed[static_cast<size_t>(a)] = needed[static_cast<size_t>(b)] = 1;
+    }
+  }
+  int built = 0;
+  for (size_t s = 0; s < needed.size(); ++s) {
+    if (!needed[s] || m.objects[s]) continue;
+    m.Object(static_cast<int>(s));
+    ++built;
+  }
+  return built;
+}
+
 ClearanceCertifier::ClearanceCertifier(std::vector<GlobalSurface> surfaces,
                                        const std::vector<std::pair<int, int>>& pairs,
                                        const std::vector<std::pair<int, int>>& body_pairs,

@@ -108,6 +108,8 @@ uint64_t DurationHistogram::Total(const uint64_t* counts) {
 
 Engine::Engine(const Scene& scene, const EngineOptions& options) : options_(options) {
   servo_ = std::make_unique<ServoLoop>(scene, options.servo);
+  link_ = std::make_unique<GlobalLink>(*servo_);
+  clearance_trees_ = link_->Prepare();
   Snapshot s;
   servo_->FillSnapshot(&s);
   snapshot_.Write(s);
@@ -366,7 +368,7 @@ void Engine::GlobalThread() {
   // bridge at once when a device state arrives instead of letting the pass finish its slice
   // (scripts/faults.sh contact_burst).
   setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), options_.global_nice);
-  GlobalLink link(*servo_);
+  GlobalLink& link = *link_;
   Snapshot snap;
   const int64_t period = static_cast<int64_t>(1e9 / options_.global_rate_hz);
   int64_t next = MonotonicNs();

@@ -16,6 +16,8 @@
 
 namespace tangent::server {
 
+class GlobalLink;
+
 struct EngineOptions {
   double rate_hz = 4000.0;  ///< servo ticks per second
   /// Hybrid timing: sleep (timer slack 1 ns) until this long before each deadline, then spin.
@@ -165,6 +167,8 @@ class Engine {
   }
   /// The smallest β of any contact the global stage added (GlobalLink::deepest_added; +∞ before
   /// the first): a penetration the servo's rows missed shows here.
+  /// How many clearance trees the engine built before serving (GlobalLink::Prepare).
+  int clearance_trees() const { return clearance_trees_; }
   double stage_deepest_added() const {
     return stage_deepest_added_.load(std::memory_order_relaxed);
   }
@@ -192,6 +196,10 @@ class Engine {
 
   EngineOptions options_;
   std::unique_ptr<ServoLoop> servo_;
+  /// The global stage's link, made (and its clearance trees built) with the engine, before any
+  /// thread runs: nothing of megabytes is allocated mid-run (docs/reliability.md, "Soak").
+  std::unique_ptr<GlobalLink> link_;
+  int clearance_trees_ = 0;
   Seqlock<DeviceSample> device_;
   SpscRing<WrenchSample, 1024> wrenches_;
   SpscRing<ContactEventMsg, 256> events_;

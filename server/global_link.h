@@ -26,6 +26,10 @@ class GlobalLink {
         certifier_(servo.GlobalSurfaces(), servo.GlobalPairs(), servo.GlobalBodyPairs(),
                    0.5 * options.activation) {}
 
+  /// Builds the certifier's tessellation trees up front (contact::ClearanceCertifier::BuildAll):
+  /// what a server does before it serves. @return how many were built.
+  int Prepare() { return certifier_.BuildAll(); }
+
   /// One pass on `snapshot`: emit(const ContactEventMsg&) for each event, in order; then the
   /// certificate of the pairs apart (clearances()). @return the number of events.
   template <class Emit>

@@ -112,10 +112,11 @@ int main(int argc, char** argv) {
     Bridge bridge(&engine, url, ch, log, status, bo);
     std::printf(
         "tangentd: scene \"%s\": %d bodies, %zu surfaces, %zu contact pairs, %zu body pairs, "
-        "%d contacts at rest; %.0f Hz, %d-DOF device, LCM %s, viewers on %s\n",
+        "%d contacts at rest, %d clearance trees; %.0f Hz, %d-DOF device, LCM %s, viewers on %s\n",
         scene->name.c_str(), scene->mechanism.num_bodies(), scene->surfaces.size(),
-        scene->pairs.size(), scene->body_pairs.size(), engine.servo().active_contacts(), eo.rate_hz,
-        eo.servo.dof, url.c_str(), bo.view_url.empty() ? "(none)" : bo.view_url.c_str());
+        scene->pairs.size(), scene->body_pairs.size(), engine.servo().active_contacts(),
+        engine.clearance_trees(), eo.rate_hz, eo.servo.dof, url.c_str(),
+        bo.view_url.empty() ? "(none)" : bo.view_url.c_str());
     const std::string serving = bridge.Serving();
     std::printf("tangentd: %s\n", serving.c_str());
     if (log) std::fprintf(log, "%s\n", serving.c_str());

@@ -143,6 +143,35 @@ TEST(ClearanceTest, AMeasurementIsReusedOnlyAsFarAsTheMoveAllows) {
   }
 }
 
+TEST(ClearanceTest, BuildAllBuildsWhatTheDeclarationsCanMeasureAndChangesNoCertificate) {
+  const nurbs::NurbsSurface ball = nurbs::MakeSphere(Eigen::Vector3d::Zero(), 5e-3);
+  const nurbs::OffsetMesh mesh = nurbs::MakeOffsetMesh(ball, 2e-5, 2.5e-4);
+  // Bodies 0..3: surfaces 0 and 1 declared as a pair; body pair (2, 0) as a whole; surface 3 on
+  // body 3 with a mesh but in no pair, and surface 4 on body 1 without a mesh.
+  std::vector<GlobalSurface> surfaces = {{0, &ball, &mesh, nullptr},
+                                         {1, &ball, &mesh, nullptr},
+                                         {2, &ball, &mesh, nullptr},
+                                         {3, &ball, &mesh, nullptr},
+                                         {1, &ball, nullptr, nullptr}};
+  const std::vector<std::pair<int, int>> pairs = {{0, 1}};
+  const std::vector<std::pair<int, int>> body_pairs = {{2, 0}};
+  const std::vector<BodyPose> poses = {
+      Pose(Eigen::Vector3d::Zero()), Pose(Eigen::Vector3d(10.5e-3, 0, 0)),
+      Pose(Eigen::Vector3d(0, 10.4e-3, 0)), Pose(Eigen::Vector3d(0, 0, 0.1))};
+  ClearanceCertifier lazy(surfaces, pairs, body_pairs, 5e-5);
+  ClearanceCertifier eager(surfaces, pairs, body_pairs, 5e-5);
+  EXPECT_EQ(eager.BuildAll(), 3);  // surfaces 0, 1 and 2: not 3 (no pair), not 4 (no mesh)
+  EXPECT_EQ(eager.BuildAll(), 0);  // built once
+  std::vector<double> a, b;
+  lazy.Certify(poses, {}, {}, &a);
+  eager.Certify(poses, {}, {}, &b);
+  ASSERT_EQ(a.size(), 2u);
+  EXPECT_EQ(a, b);
+  EXPECT_LT(a[0], 0.5e-3);  // measured on the tessellations (within exact_within)
+  EXPECT_LT(a[1], 0.4e-3);
+  EXPECT_EQ(lazy.BuildAll(), 0);  // Certify built the same three on first use
+}
+
 TEST(ClearanceTest, CertifyLeavesOutContactsAndTakesTheStagesView) {
   const nurbs::NurbsSurface ball = nurbs::MakeSphere(Eigen::Vector3d::Zero(), 5e-3);
   const nurbs::OffsetMesh mesh = nurbs::MakeOffsetMesh(ball, 2e-5, 2.5e-4);

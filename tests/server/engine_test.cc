@@ -1,6 +1,6 @@
 // The Engine's threads on the paperclip scene: a device state published while the servo sleeps
 // is answered at once (the doorbell), not at the next scheduled tick; each answer echoes its
-// device state and comes once.
+// device state and comes once. The global stage's clearance trees are built before it serves.
 
 #include "server/engine.h"
 
@@ -18,6 +18,8 @@ TEST(EngineTest, ADeviceStateWakesTheSleepingServoAndIsAnsweredOnce) {
   o.rate_hz = 1.0;  // one scheduled tick a second: an answer within the second is the doorbell's
   o.servo_cpu = o.global_cpu = -1;
   Engine engine(*scene, o);
+  // Every clip's wire is watched, and its clearance tree is built before the threads run.
+  EXPECT_EQ(engine.clearance_trees(), static_cast<int>(scene->surfaces.size()));
   engine.Start();
   // The first scheduled tick is a second after Start: the servo sleeps now.
   WrenchSample w;
@@ -54,6 +56,7 @@ TEST(EngineTest, TheServoTakesTheGlobalStagesClearanceCertificates) {
   EngineOptions o;
   o.servo_cpu = o.global_cpu = -1;
   Engine engine(*scene, o);
+  EXPECT_EQ(engine.clearance_trees(), static_cast<int>(scene->surfaces.size()));  // 9, up front
   engine.Start();
   LoopCounters c;
   const int64_t deadline = MonotonicNs() + 5'000'000'000;
