@@ -4,13 +4,15 @@
 // events; and when the chain comes apart (the force at the hand stays below 0.02 N for a whole
 // circle while the drag pulls) or is held only by an unresolved penetration (a tick's constraint
 // violation above issue 33's 1e-6 m: the solve jammed, as with the step reach on from 140 s; or
-// a contact the global stage adds deeper than that: the rows missed it).
-// Exit status 1 for either.
+// a contact the global stage adds deeper than that: the rows missed it; or the wires' true gap,
+// from their centre lines (testing/tube_gap.h, every 50 ms of the drag), below −1e-6 m: the
+// wires crossed, whatever the rows read). Exit status 1 for either.
 //
 //   ./build/bench/chain_soak [--seconds 150] [--from 0]   (print seconds from)
 //                            [--trace-from T --trace-to T]  (every device step's contacts)
 //                            [--lines] [--reach]  (ServoOptions::line_contacts, step_reach)
 //                            [--iterations N]  (ServoOptions::max_iterations, default 10)
+//                            [--truth-every 50]  (ms between true-gap checks; 0: none)
 
 #include <chrono>
 #include <cmath>
@@ -20,11 +22,13 @@
 #include <string>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "server/global_link.h"
 #include "server/phantom.h"
 #include "server/scene.h"
 #include "server/servo.h"
+#include "testing/tube_gap.h"
 
 using namespace tangent::server;
 
@@ -43,9 +47,12 @@ int main(int argc, char** argv) {
   }
   const auto scene = LoadScene(std::string(TANGENT_SCENES_DIR) + "/paperclips.json");
   ServoOptions options;
+  int truth_every = 50;  // device steps (ms) between ground-truth gap checks; 0: none
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
     if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
+    if (!std::strcmp(argv[i], "--truth-every") && i + 1 < argc)
+      truth_every = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--iterations") && i + 1 < argc)
       options.max_iterations = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--enter") && i + 1 < argc)
@@ -76,6 +83,13 @@ int main(int argc, char** argv) {
   int events = 0, contacts_max = 0, quiet = 0;
   bool apart = false;
   double jammed_at = -1.0, jam_violation = 0.0;
+  // The wires' true gaps (testing/tube_gap.h), every `truth_every` device steps: a row held off
+  // its extremum, or a section made inactive, can read ~0 while the wires cross beside it.
+  std::vector<tangent::testing::Centreline> centre;
+  for (const auto& surface : scene->surfaces) {
+    centre.push_back(tangent::testing::SampleCentreline(surface.surface, 0, 4000));
+  }
+  double truest = INFINITY, truest_at = 0.0;
   for (int64_t k = 0; k < static_cast<int64_t>(seconds / dt); ++k) {
     const double t = dt * static_cast<double>(k);
     const Eigen::Vector3d rendered = watchdog.Step(t, dt, wrench, received);
@@ -123,8 +137,9 @@ int main(int argc, char** argv) {
         if (!servo.lines().line(p)) continue;
         for (int side = 0; side < tangent::server::LineContacts::kSections; ++side) {
           const auto& x = servo.lines().section(p, side);
-          std::printf(" {line %d/%d b %.2e at %.4f u %.4f %.4f %.4f}", p, side, x.ext.beta, x.value,
-                      x.u[0], x.u[1], x.u[2]);
+          std::printf(" {line %d/%d b %.2e at %.4f u %.4f %.4f %.4f %s %s}", p, side, x.ext.beta,
+                      x.value, x.u[0], x.u[1], x.u[2], tangent::contact::ToString(x.ext.status),
+                      tangent::contact::ToString(x.ext.kind));
         }
       }
       std::printf("\n");
@@ -147,6 +162,34 @@ int main(int argc, char** argv) {
             "chain_soak: the global stage found a contact %.1e m deep at %.3f s "
             "(above %.0e m: not held)\n",
             jam_violation, t, kHeldViolation);
+      }
+    }
+    if (truth_every > 0 && k % truth_every == 0) {
+      for (const auto& pair : scene->pairs) {
+        const auto& sa = scene->surfaces[static_cast<size_t>(pair.surface_a)];
+        const auto& sb = scene->surfaces[static_cast<size_t>(pair.surface_b)];
+        auto placed = [&](int body, Eigen::Matrix3d* R, Eigen::Vector3d* p) {
+          const auto& q = snap.q[body];
+          *R = Eigen::Quaterniond(q[3], q[4], q[5], q[6]).normalized().toRotationMatrix();
+          *p = Eigen::Vector3d(q[0], q[1], q[2]);
+        };
+        Eigen::Matrix3d Ra, Rb;
+        Eigen::Vector3d pa, pb;
+        placed(sa.body, &Ra, &pa);
+        placed(sb.body, &Rb, &pb);
+        const auto& ca = centre[static_cast<size_t>(pair.surface_a)];
+        const auto& cb = centre[static_cast<size_t>(pair.surface_b)];
+        const double gap =
+            tangent::testing::CentrelineDistance(ca, Ra, pa, cb, Rb, pb) - ca.radius - cb.radius;
+        if (gap < truest) truest = gap, truest_at = t;
+        if (jammed_at < 0.0 && gap < -kHeldViolation) {
+          jammed_at = t;
+          jam_violation = -gap;
+          std::printf(
+              "chain_soak: the wires cross by %.1e m at %.3f s (their centre lines; above "
+              "%.0e m: not held)\n",
+              -gap, t, kHeldViolation);
+        }
       }
     }
     quiet = t > 10.0 && f.norm() < 0.02 ? quiet + 1 : 0;
@@ -178,6 +221,10 @@ int main(int argc, char** argv) {
                 jam_violation, jammed_at);
   } else {
     std::printf("chain_soak: held after %.0f s\n", seconds);
+  }
+  if (truth_every > 0) {
+    std::printf("chain_soak: least true gap %.1e m (at %.3f s), checked every %d ms\n", truest,
+                truest_at, truth_every);
   }
   return apart || jammed_at >= 0.0 ? 1 : 0;
 }

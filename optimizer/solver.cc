@@ -98,6 +98,9 @@ Solver::Solver(const Problem& problem, const SolverOptions& options)
     ldlt_.analyzePattern(H_.sparse());  // The structure is fixed: analysed once.
   } else if (n_ <= kSmallDense) {
     small_llt_.Reserve(n_);
+    kkt_full_.setZero(n_, n_);
+    kkt_inverse_.setZero(n_);
+    kkt_y_.setZero(n_);
   } else if (!options.design.enabled) {
     // Sizes the factorization's storage (later computes reuse it: the servo's solves allocate
     // nothing). Not LLT(n_) assigned: that constructor leaves its status uninitialized and the
@@ -354,6 +357,7 @@ double Solver::NewtonMatrix() {
 }
 
 bool Solver::Factorize() {
+  indefinite_ = false;
   if (H_.is_sparse()) {
     ldlt_.factorize(H_.sparse());
     return ldlt_.info() == Eigen::Success && (ldlt_.vectorD().array() > 0.0).all();
@@ -367,6 +371,10 @@ void Solver::SolveStep() {
   if (H_.is_sparse()) {
     step_ = ldlt_.solve(g_);
     step_ = -step_;
+  } else if (indefinite_) {
+    kkt_y_.noalias() = kkt_eig_.eigenvectors().transpose() * g_;
+    kkt_y_.array() *= kkt_inverse_.array();
+    step_.noalias() = -kkt_eig_.eigenvectors() * kkt_y_;
   } else {
     step_ = -g_;
     if (n_ <= kSmallDense) {
@@ -463,6 +471,15 @@ double Solver::NewtonStep() {
   // ten times the damping (Levenberg–Marquardt). A barely positive definite matrix otherwise
   // gives an enormous step along its weakest direction (measured: a paperclip hanging on two
   // contacts, free to spin about the line through them, flipped 186° in one step).
+  //
+  // A matrix that is not positive definite, where a loaded contact's curvature outweighs the
+  // objective's along a motion that keeps it touching, first gets its Newton step from its
+  // eigendecomposition (IndefiniteStep), taken when it is within the trust region. The solve is
+  // Newton on the KKT conditions, which needs a regular matrix, not a definite one, and the line
+  // search below judges a step by the constraints it leaves, not by descent. Damped instead
+  // until positive definite (10⁷ times the base damping on the paperclip soak's line contacts),
+  // such steps were 1e-7 long while the KKT residual grew, and every tick stalled at the
+  // iteration cap (docs/optimizer.md, "Indefinite Newton matrices").
   double lm = options_.damping * objective_scale;
   H_.AddToDiagonal(lm);
   for (int attempt = 0; attempt < 40; ++attempt) {
@@ -470,12 +487,42 @@ double Solver::NewtonStep() {
     if (factor_ok_) {
       SolveStep();
       if (StepWithinTrustRegion()) break;
+    } else if (attempt == 0 && IndefiniteStep()) {
+      factor_ok_ = true;
+      if (StepWithinTrustRegion()) {
+        ++indefinite_steps_;
+        break;
+      }
+      indefinite_ = factor_ok_ = false;
     }
     const double more = std::max(1e-8 * objective_scale, 10 * lm);
     H_.AddToDiagonal(more - lm);
     lm = more;
   }
   return lm;
+}
+
+bool Solver::IndefiniteStep() {
+  // Servo-sized dense matrices outside design mode (whose line search wants descent).
+  if (H_.is_sparse() || n_ > kSmallDense || options_.design.enabled) return false;
+  kkt_full_ = H_.dense().selfadjointView<Eigen::Upper>();
+  kkt_eig_.compute(kkt_full_);
+  if (kkt_eig_.info() != Eigen::Success) return false;
+  const auto& ev = kkt_eig_.eigenvalues();
+  // Eigenvalues within 1e-12 of the largest (in magnitude) are the matrix's rounding: along
+  // their eigenvectors the step is damped to that floor. (An exact solve there, by a pivoted
+  // LDLᵀ, differs from this one by 1-3 % at condition numbers of 1e14 on the paperclips, and
+  // the soak came apart at 120-130 s with it; with the floor it holds.)
+  const double floor = 1e-12 * ev.cwiseAbs().maxCoeff();
+  if (!(floor > 0.0)) return false;
+  for (int i = 0; i < n_; ++i) {
+    kkt_inverse_[i] = 1.0 / (std::abs(ev[i]) < floor ? floor : ev[i]);
+  }
+  indefinite_ = true;
+  SolveStep();
+  if (step_.allFinite()) return true;
+  indefinite_ = false;
+  return false;
 }
 
 void Solver::FinishingCorrection(Eigen::VectorXd* q, SolveStats* st) {
@@ -546,6 +593,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
   problem_.mechanism().MetricBlocks(q_prev_, &M_);
   objective_known_ = false;  // (E depends on q_prev_ through least astonishment)
   SolveStats st;
+  indefinite_steps_ = 0;
   ev_.Evaluate(q);
   // Primal-dual augmented Lagrangian (stabilized SQP): Newton on
   //   ∇E − J_Eᵀλ_E − J_Iᵀλ_I = 0,   c_E + (λ_E − λ̄_E)/μ = 0   (and PHR-shifted inequalities)
@@ -756,6 +804,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
   }
   st.objective = ObjectiveAt(q);
   st.penalty = mu_;
+  st.indefinite_steps = indefinite_steps_;
   if (options_.second_order_check) SecondOrderCheck(q, &st);
   return st;
 }

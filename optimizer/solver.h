@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
 
 #include "optimizer/clearance_guard.h"
@@ -83,6 +84,8 @@ struct SolverOptions {
 struct SolveStats {
   int iterations = 0;   ///< Newton iterations
   int corrections = 0;  ///< finishing corrections kept (SolverOptions::finish_violation)
+  /// Newton steps taken on a matrix that is not positive definite (Solver::IndefiniteStep).
+  int indefinite_steps = 0;
   double max_violation = 0.0;
   double kkt_residual = 0.0;
   /// Largest constraint value of an inequality row carrying a positive multiplier (a force on
@@ -247,8 +250,24 @@ class Solver {
   Eigen::VectorXd ls_r_, ls_Jr_, ls_rhs_, ls_lambda_;
   Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> ls_ldlt_;
   std::vector<char> ls_unknown_;
+  // The Newton step of a matrix that is not positive definite (IndefiniteStep; servo-sized
+  // dense matrices only): its eigendecomposition, in storage of a fixed largest size so that
+  // neither it nor its solves allocate.
+  using SmallMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor,
+                                    kSmallDense, kSmallDense>;
+  using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kSmallDense, 1>;
+  SmallMatrix kkt_full_;
+  Eigen::SelfAdjointEigenSolver<SmallMatrix> kkt_eig_;
+  SmallVector kkt_inverse_, kkt_y_;
+  int indefinite_steps_ = 0;  ///< this solve's (SolveStats::indefinite_steps)
+  bool indefinite_ = false;   ///< SolveStep uses kkt_eig_ (IndefiniteStep), not a Cholesky factor
   double mu_ = 0.0;
-  bool factor_ok_ = false;       ///< the last Newton step left a usable factorization
+  bool factor_ok_ = false;  ///< the last Newton step left a usable factorization
+  /// The Newton step of H_ (after the base damping) when it is not positive definite, from its
+  /// eigendecomposition: exact along every eigenvector whose eigenvalue is above 1e-12 of the
+  /// largest in magnitude, negative ones included; damped to that floor along the others (the
+  /// directions the matrix does not determine at double precision). true with step_ set.
+  bool IndefiniteStep();
   bool kept_jacobians_ = false;  ///< ev_ kept the last step's Jacobians (finishing correction)
   // Design mode only (empty otherwise): the BFGS model of the design objectives' curvature, the
   // design gradient now and at the previous iterate, and that iterate.

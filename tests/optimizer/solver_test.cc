@@ -579,6 +579,54 @@ TEST(SolverTest, ALoadedContactOnACurvedSurfaceStaysActiveWhileDragged) {
   EXPECT_GT(guess_hits, 0);  // the failure this guards against, reproduced
 }
 
+// A probe pressed onto a ball by a pull from straight behind the ball: the contact's curvature
+// (the ball's 1/R, times a load of three radii's pull) outweighs the pull's along the ball, so
+// the Newton matrix is not positive definite, and the stationary point is a saddle (sliding
+// round the ball would bring the probe nearer the target). The solve is Newton on the KKT
+// conditions: from a start a little off the axis it converges to that point in a few exact
+// (indefinite) steps, allocating nothing. Damping the matrix until it was positive definite
+// instead shortened the steps until the iteration cap.
+TEST(SolverTest, AnIndefiniteNewtonMatrixGetsItsExactStep) {
+  constexpr double radius = 0.01;
+  const nurbs::NurbsSurface ball = nurbs::MakeSphere(Eigen::Vector3d::Zero(), radius);
+  Mechanism m;
+  const int fixed = m.AddBody(Body{"ball", true});
+  Body probe_body{"probe"};
+  probe_body.pose << radius, 0.02 * radius, 0, 1, 0, 0, 0;  // on the ball, 1.1 deg off the axis
+  const int probe = m.AddBody(probe_body);
+  Problem p(m);
+  const Attachment tip{probe, {0, 0, 0}};
+  auto goal = MakePositionGoal(tip, {-2.0 * radius, 0, 0});
+  p.AddObjective(goal, 1.0);
+  p.AddInequality(MakePointOnSurface(tip, fixed, &ball, {0.0, 0.5}));
+  p.set_least_astonishment(0.0);
+  SolverOptions o;
+  o.max_iterations = 10;
+  o.second_order_check = true;
+  Solver s(p, o);
+  Eigen::VectorXd q = m.InitialCoordinates();
+  const long allocations_before = tangent::testing::AllocationCount();
+  SolveStats st = s.Solve(&q);
+  const long allocations = tangent::testing::AllocationCount() - allocations_before;
+  ASSERT_TRUE(st.converged) << "iterations " << st.iterations << ", kkt " << st.kkt_residual;
+  EXPECT_GT(st.indefinite_steps, 0);
+  EXPECT_LE(st.iterations, 6);
+  EXPECT_EQ(allocations, 0);
+  // On the axis, pressed with the pull's whole force (three radii at weight 1), at a saddle.
+  EXPECT_NEAR(q[0], radius, 1e-10);
+  EXPECT_NEAR(q.segment<2>(1).norm(), 0.0, 1e-8);
+  EXPECT_NEAR(s.inequality_multipliers()[0], 3.0 * radius, 1e-9);
+  ASSERT_TRUE(st.reduced_hessian_checked);
+  EXPECT_FALSE(st.reduced_hessian_positive_definite);
+  // Pulled to a point off the ball instead, the probe leaves it and settles there, where the
+  // matrix is positive definite again: no indefinite step.
+  SetGoalTarget(s.data(), *goal, {2.0 * radius, 2.0 * radius, 0});
+  for (int k = 0; k < 3; ++k) st = s.Solve(&q);
+  EXPECT_TRUE(st.converged);
+  EXPECT_EQ(st.indefinite_steps, 0);
+  EXPECT_NEAR((q.head<3>() - Eigen::Vector3d(2.0, 2.0, 0.0) * radius).norm(), 0.0, 1e-9);
+}
+
 // Issue 13: a non-finite input gets a defined status and never poisons the next solve. Before,
 // the residuals' maxCoeff skipped a NaN (a NaN configuration returned "converged" after 0
 // iterations), and one NaN goal turned the multipliers into NaN for every later solve.
