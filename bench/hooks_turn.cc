@@ -29,7 +29,6 @@
 #include "server/servo.h"
 #include "testing/conformal_scenes.h"
 #include "testing/drag_path.h"
-#include "testing/torus_gap.h"
 
 using namespace tangent::server;
 
@@ -58,13 +57,7 @@ int main(int argc, char** argv) {
   const int ring = scene->BodyIndex("ring");
   int64_t now = 1'000'000'000;
   double worst = 0.0, largest_step = 0.0;
-  // The rings' true gap, from their centre circles (testing/torus_gap.h): the tori of kHooksScene
-  // (1.2 mm major, 0.45 mm minor radius), the grasped one's surface turned 90° about x in its body.
-  constexpr double kMajor = 1.2e-3, kMinor = 0.45e-3;
-  const Eigen::Matrix3d wire_in_ring =
-      Eigen::Quaterniond(std::sqrt(0.5), std::sqrt(0.5), 0, 0).toRotationMatrix();
-  const tangent::testing::Circle fixed_circle =
-      tangent::testing::TorusCircle(kMajor, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  // The rings' true gap (tangent::testing::HooksTrueGap), every 10 ms.
   double deepest = INFINITY, deepest_at = 0.0;
   Eigen::Vector3d last = Eigen::Vector3d::Zero();
   std::printf(
@@ -88,15 +81,7 @@ int main(int argc, char** argv) {
     last = f;
     const double x = snap.q[ring][0];
     if (step % 10 == 0) {
-      const Eigen::Quaterniond Q(snap.q[ring][3], snap.q[ring][4], snap.q[ring][5],
-                                 snap.q[ring][6]);
-      const double gap =
-          tangent::testing::CircleDistance(
-              fixed_circle,
-              tangent::testing::TorusCircle(
-                  kMajor, Q.normalized().toRotationMatrix() * wire_in_ring,
-                  Eigen::Vector3d(snap.q[ring][0], snap.q[ring][1], snap.q[ring][2]))) -
-          2 * kMinor;
+      const double gap = tangent::testing::HooksTrueGap(snap.q[ring]);
       if (gap < deepest) deepest = gap, deepest_at = t;
     }
     const double turn =

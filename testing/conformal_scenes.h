@@ -3,6 +3,12 @@
 // Issue 33's canonical conformal contacts as scenes (tests/server/conformal_test.cc, the
 // stability suite): pairs whose surfaces nearly coincide over a line or a patch.
 
+#include <numbers>
+
+#include <Eigen/Geometry>
+
+#include "testing/torus_gap.h"
+
 namespace tangent::testing {
 
 // The groove: a cylinder of radius 5.05 mm facing its axis, 40 mm along x; the rod: radius
@@ -118,5 +124,18 @@ inline constexpr const char* kHooksScene = R"JSON({
              "max_force_rate": 500, "ramp_time": 1.0},
   "offset": {"tolerance": 0.02, "margin": 0.25}
 })JSON";
+
+/// The kHooksScene rings' true gap (testing/torus_gap.h): their centre circles' distance less
+/// both wires' radii, for the grasped ring's pose q (position, then quaternion w, x, y, z; m).
+inline double HooksTrueGap(const double q[7]) {
+  constexpr double kMajor = 1.2e-3, kMinor = 0.45e-3;
+  // (The grasped ring's surface is turned 90° about x in its body.)
+  const Eigen::Matrix3d R =
+      Eigen::Quaterniond(q[3], q[4], q[5], q[6]).normalized().toRotationMatrix() *
+      Eigen::Matrix3d(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()));
+  return CircleDistance(TorusCircle(kMajor, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()),
+                        TorusCircle(kMajor, R, Eigen::Vector3d(q[0], q[1], q[2]))) -
+         2 * kMinor;
+}
 
 }  // namespace tangent::testing

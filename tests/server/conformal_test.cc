@@ -19,7 +19,6 @@
 #include "testing/alloc_counter.h"
 #include "testing/conformal_scenes.h"
 #include "testing/drag_path.h"
-#include "testing/torus_gap.h"
 
 namespace tangent::server {
 namespace {
@@ -174,19 +173,7 @@ HooksOutcome DriveHooks(double period = 8.0, int pass_every = 1) {
     servo.FillSnapshot(&snap);
     if (step % pass_every == 0) link.PassInto(&servo, snap);
     if (step % 10 == 0) {
-      // The kHooksScene tori (1.2 mm major, 0.45 mm minor radius), the grasped one's surface
-      // turned 90° about x in its body.
-      const Eigen::Quaterniond Q(snap.q[ring][3], snap.q[ring][4], snap.q[ring][5],
-                                 snap.q[ring][6]);
-      const Eigen::Matrix3d R =
-          Q.normalized().toRotationMatrix() *
-          Eigen::Matrix3d(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()));
-      const double gap =
-          testing::CircleDistance(
-              testing::TorusCircle(1.2e-3, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()),
-              testing::TorusCircle(
-                  1.2e-3, R, Eigen::Vector3d(snap.q[ring][0], snap.q[ring][1], snap.q[ring][2]))) -
-          0.9e-3;
+      const double gap = testing::HooksTrueGap(snap.q[ring]);
       out.true_gap = std::min(out.true_gap, gap);
     }
     const Eigen::Vector3d f(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
