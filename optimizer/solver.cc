@@ -477,7 +477,7 @@ double Solver::NewtonStep() {
   // eigendecomposition (IndefiniteStep), taken when it is within the trust region. The solve is
   // Newton on the KKT conditions, which needs a regular matrix, not a definite one, and the line
   // search below judges a step by the constraints it leaves, not by descent. Damped instead
-  // until positive definite (10⁷ times the base damping on the paperclip soak's line contacts),
+  // until positive definite (10 against a base of 1e-12 on the paperclip soak's line contacts),
   // such steps were 1e-7 long while the KKT residual grew, and every tick stalled at the
   // iteration cap (docs/optimizer.md, "Indefinite Newton matrices").
   double lm = options_.damping * objective_scale;
@@ -510,9 +510,9 @@ bool Solver::IndefiniteStep() {
   if (kkt_eig_.info() != Eigen::Success) return false;
   const auto& ev = kkt_eig_.eigenvalues();
   // Eigenvalues within 1e-12 of the largest (in magnitude) are the matrix's rounding: along
-  // their eigenvectors the step is damped to that floor. (An exact solve there, by a pivoted
-  // LDLᵀ, differs from this one by 1-3 % at condition numbers of 1e14 on the paperclips, and
-  // the soak came apart at 120-130 s with it; with the floor it holds.)
+  // their eigenvectors the step is damped to that floor rather than amplifying it. (A pivoted
+  // LDLᵀ solve differs from this one by 1-3 % at the paperclips' condition numbers of 1e14; the
+  // hooks hold with floors from 1e-16 to 1e-9 alike: docs/optimizer.md.)
   const double floor = 1e-12 * ev.cwiseAbs().maxCoeff();
   if (!(floor > 0.0)) return false;
   for (int i = 0; i < n_; ++i) {

@@ -176,9 +176,15 @@ class Solver {
   void Normalize(Eigen::VectorXd* q) const;
 
   /// Assembles and factorizes the Newton matrix for the current active set and solves for step_
-  /// (damped until positive definite and within the trust region); @return the damping used.
+  /// (an indefinite matrix's own step when that is within the trust region, IndefiniteStep;
+  /// else damped until positive definite and within it); @return the damping used.
   double NewtonStep();
   bool Factorize();
+  /// The Newton step of H_ (after the base damping) when it is not positive definite, from its
+  /// eigendecomposition: exact along every eigenvector whose eigenvalue is above 1e-12 of the
+  /// largest in magnitude, negative ones included; damped to that floor along the others (the
+  /// directions the matrix does not determine at double precision). true with step_ set.
+  bool IndefiniteStep();
   void SolveStep();
   void SecondOrderCheck(const Eigen::VectorXd& q, SolveStats* st);
   /// An orthonormal basis (n x k, k ≥ 0) of the motions the active constraints leave free at the
@@ -262,12 +268,7 @@ class Solver {
   int indefinite_steps_ = 0;  ///< this solve's (SolveStats::indefinite_steps)
   bool indefinite_ = false;   ///< SolveStep uses kkt_eig_ (IndefiniteStep), not a Cholesky factor
   double mu_ = 0.0;
-  bool factor_ok_ = false;  ///< the last Newton step left a usable factorization
-  /// The Newton step of H_ (after the base damping) when it is not positive definite, from its
-  /// eigendecomposition: exact along every eigenvector whose eigenvalue is above 1e-12 of the
-  /// largest in magnitude, negative ones included; damped to that floor along the others (the
-  /// directions the matrix does not determine at double precision). true with step_ set.
-  bool IndefiniteStep();
+  bool factor_ok_ = false;       ///< the last Newton step left a usable factorization
   bool kept_jacobians_ = false;  ///< ev_ kept the last step's Jacobians (finishing correction)
   // Design mode only (empty otherwise): the BFGS model of the design objectives' curvature, the
   // design gradient now and at the previous iterate, and that iterate.

@@ -165,10 +165,10 @@ class Engine {
   double global_longest_gap_ms() const {
     return 1e-6 * static_cast<double>(global_longest_gap_ns_.load(std::memory_order_relaxed));
   }
-  /// The smallest β of any contact the global stage added (GlobalLink::deepest_added; +∞ before
-  /// the first): a penetration the servo's rows missed shows here.
   /// How many clearance trees the engine built before serving (GlobalLink::Prepare).
   int clearance_trees() const { return clearance_trees_; }
+  /// The smallest β of any contact the global stage added (GlobalLink::deepest_added; +∞ before
+  /// the first): a penetration the servo's rows missed shows here.
   double stage_deepest_added() const {
     return stage_deepest_added_.load(std::memory_order_relaxed);
   }
