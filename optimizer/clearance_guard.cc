@@ -13,6 +13,7 @@ void ClearanceGuard::Configure(const Mechanism& mechanism, std::vector<std::pair
   pairs_ = std::move(pairs);
   reach_ = std::move(reach);
   reach_.resize(static_cast<size_t>(mechanism.num_bodies()), 0.0);
+  bounded_.assign(reach_.size(), 0);
   q_ref_ = mechanism.InitialCoordinates();
   candidate_ref_ = q_ref_;
   clearance_.assign(pairs_.size(), kInfinity);
@@ -42,6 +43,24 @@ double ClearanceGuard::Motion(int b, const Eigen::VectorXd& q_ref, const Eigen::
   // sin((a + b)/2) while (a + b)/2 < π/2; beyond, the chord's largest value 2.
   const double chord = ca * cb - sa * sb <= 0.0 ? 2.0 : 2.0 * (sa * cb + ca * sb);
   return translation + chord * reach;
+}
+
+double ClearanceGuard::MotionFraction(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& q,
+                                      const Eigen::VectorXd& step, double alpha,
+                                      double bound) const {
+  // Each body's μ grows with α (the segment only lengthens): its admissible fractions are an
+  // interval [0, α_b]; the step's is the least of them.
+  for (size_t k = 0; k < reach_.size(); ++k) {
+    const int b = static_cast<int>(k);
+    if (!bounded_[k] || Motion(b, q_ref, q, step, alpha) <= bound) continue;
+    double lo = 0.0, hi = alpha;
+    for (int i = 0; i < 20; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (Motion(b, q_ref, q, step, mid) <= bound ? lo : hi) = mid;
+    }
+    alpha = lo;
+  }
+  return alpha;
 }
 
 bool ClearanceGuard::Within(const Eigen::VectorXd& q_ref, const std::vector<double>& clearance,

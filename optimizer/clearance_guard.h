@@ -18,6 +18,7 @@
 // so the pair stays at least c − μ_a − μ_b apart along the whole segment. The step is kept to
 // μ_a + μ_b ≤ kShare · c: the surfaces stay at least (1 − kShare) c apart, and cannot cross.
 
+#include <algorithm>
 #include <utility>
 #include <vector>
 
@@ -61,6 +62,15 @@ class ClearanceGuard {
   /// certified pair within its share; 1 when the whole step is. Allocation free.
   double Fraction(const Eigen::VectorXd& q, const Eigen::VectorXd& step) const;
 
+  /// The largest fraction α ∈ [0, alpha] of `step` from q (by bisection, to 2⁻²⁰ of alpha)
+  /// keeping every marked body's motion from q_ref (Motion, along the segment) within `bound`;
+  /// alpha when the whole of it does. Allocation free.
+  double MotionFraction(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& q,
+                        const Eigen::VectorXd& step, double alpha, double bound) const;
+  /// Marks body b (or clears its mark) for MotionFraction. Allocation free.
+  void Bound(int b, bool on) { bounded_[static_cast<size_t>(b)] = on; }
+  void ClearBounds() { std::fill(bounded_.begin(), bounded_.end(), 0); }
+
   /// μ_b of the header for the segment q → q + α step against q_ref (0 for a fixed body).
   double Motion(int b, const Eigen::VectorXd& q_ref, const Eigen::VectorXd& q,
                 const Eigen::VectorXd& step, double alpha) const;
@@ -78,6 +88,7 @@ class ClearanceGuard {
   std::vector<std::pair<int, int>> pairs_;
   std::vector<double> reach_;
   Eigen::VectorXd q_ref_, candidate_ref_;
+  std::vector<char> bounded_;  ///< per body: MotionFraction bounds it
   std::vector<double> clearance_, candidate_;
   bool armed_ = false;
 };

@@ -742,6 +742,9 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
     const double slope = design ? kkt_.dot(step_) : 0.0;
     double alpha = options_.step_reach ? ReachFraction(problem_, data(), q, step_) : 1.0;
     if (guard_ && guard_->armed()) alpha = std::min(alpha, guard_->Fraction(q, step_));
+    if (guard_ && options_.max_solve_motion > 0.0) {
+      alpha = guard_->MotionFraction(q_prev_, q, step_, alpha, options_.max_solve_motion);
+    }
     // Trials start from q's contact states: a rejected trial's (a contact re-solved onto another
     // branch of its pair, far along a step the line search then halves) must not be where the
     // shorter one starts (measured on the paperclip soak: every halving of a 2 mm step re-solved

@@ -42,6 +42,12 @@ struct SolverOptions {
   /// another past the contact that holds them apart. Off by default: measured so far only on
   /// the paperclip soak (docs/reliability.md), where it does not yet hold the chain on its own.
   bool step_reach = false;
+  /// Solve motion bound (m; 0: none): every Newton step is shortened so that no point of a body
+  /// the clearance guard marks (ClearanceGuard::Bound; within the body's reach from its origin)
+  /// ends farther than this from where it was at the solve's anchor (ClearanceGuard::Motion).
+  /// Needs the clearance guard (set_clearance_guard). The servo marks the bodies of contacts
+  /// near a pitchfork of their distance (ServoOptions::max_part_speed).
+  double max_solve_motion = 0.0;
   /// Newton steps per iteration while the inequalities' active set changes (its guess from the
   /// multipliers, then its corrections from the linearized constraints after the step).
   int max_active_set_passes = 4;
@@ -160,6 +166,8 @@ class Solver {
   /// Shortens every step to what `guard` admits (optimizer/clearance_guard.h; nullptr: none).
   /// The guard must outlive the solver's solves.
   void set_clearance_guard(const ClearanceGuard* guard) { guard_ = guard; }
+  /// SolverOptions::max_solve_motion for the next solves (the servo's, each tick).
+  void set_max_solve_motion(double bound) { options_.max_solve_motion = bound; }
   /// This solver's per-solve data of the problem: goal targets, tracked contacts (the Problem
   /// is shared and never changed; several solvers of one problem may run on different threads).
   ProblemData& data() { return ev_.data(); }

@@ -153,6 +153,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
       } else {
         slot.term = optimizer::MakeSurfaceContact(f.body, &f.surface, g.body, &g.surface, seed,
                                                   options.tracking);
+        slot.plain = true;
       }
       slot.line = line;
       const int index = p.AddInequality(slot.term);  // deactivated below, once solver_ has data
@@ -548,6 +549,7 @@ bool ServoLoop::MoveScene(const DeviceSample* fresh_device, double dt, const Inj
     grasp_state_->target = target_;
     if (grasp_orientation_state_)
       grasp_orientation_state_->R_target = orientation_target_.toRotationMatrix();
+    solver_->set_max_solve_motion(BoundSnappingParts() ? options_.max_part_speed * dt : 0.0);
     st = solver_->Solve(&q_);
     if (inject.stage == InjectedFault::kSolverResult) q_[0] = inject.value;
     fault = !Sane(st);

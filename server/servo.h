@@ -66,6 +66,13 @@ struct ServoOptions {
   /// clearance certificate (AdoptClearances), so no pair of parts certified apart can pass
   /// through each other before the stage looks again, however late that is.
   bool clearance_guard = true;
+  /// m/s: a part one of whose contacts is near a pitchfork of its distance (λ_min of the
+  /// relative curvature below a tenth of λ_max at the tick's start: a clip turning towards
+  /// parallel in another's hook, free to turn) moves no point faster than this, times the
+  /// tick's own time step, in that tick's solve (optimizer::SolverOptions::max_solve_motion;
+  /// 0: no bound). Without it one solve moved such a clip 3.4 mm, through the other's wire
+  /// (docs/reliability.md, "Soak"). 0.2 m/s is 40 times the demo's drag.
+  double max_part_speed = 0.2;
 };
 
 /// Test hooks: a one-shot value injected into one stage of the next tick, to show that a
@@ -190,6 +197,7 @@ class ServoLoop {
     optimizer::BodyContactTerm::State* body_state = nullptr;
     int good_a = -1, good_b = -1;  ///< the body slot's face pair at the last good tick (−1 free)
     int line = -1;  ///< its pair's index in lines_ (a declared untrimmed unilateral pair), or −1
+    bool plain = false;  ///< its term is a SurfaceContactTerm (a declared untrimmed pair)
     /// Moves a body pair's slot to surfaces (a, b) (allocation free); false if not its faces.
     bool Target(int a, int b);
     /// The contact in the pair's order (a's parameters first; p_a on a).
@@ -255,6 +263,12 @@ class ServoLoop {
   /// After a good tick: line-like contacts go to line mode (their rows retired, the sections
   /// placed), lines follow, and lines no longer line-like resume their point contact (lines_).
   void FollowLines();
+  /// Marks for the tick motion bound the bodies of contacts near a pitchfork of their distance
+  /// (ServoOptions::max_part_speed); false when none is.
+  bool BoundSnappingParts();
+  /// λ_min / λ_max below which a contact is near a pitchfork (BoundSnappingParts): the line
+  /// contacts' entry ratio (LineContactOptions::enter).
+  static constexpr double kSnapCurvature = 0.1;
   /// Activates a free slot of line pair `line` at u (pair order), if one is free.
   void ResumePoint(int line, const Eigen::Vector4d& u);
   /// The snapshot's contacts from *count on: each pair in line mode as its middle section.

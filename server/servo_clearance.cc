@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "contact/clearance.h"
+#include "contact/relative_curvature.h"
 #include "server/servo.h"
 
 namespace tangent::server {
@@ -24,8 +25,11 @@ void ServoLoop::StartClearanceGuard(const contact::GlobalContactStage& stage,
     r = std::max(r, contact::SurfaceReach(*s.mesh));
   }
   guard_.Configure(m, contact::WatchedBodyPairs(surfaces, pairs, body_pairs), std::move(reach));
+  // The guard also measures the tick motion bound (its bodies' reaches), armed or not.
+  if (options_.clearance_guard || options_.max_part_speed > 0.0) {
+    solver_->set_clearance_guard(&guard_);
+  }
   if (!options_.clearance_guard) return;
-  solver_->set_clearance_guard(&guard_);
   // The first certificate, from the cold pass at the initial poses. The pass found the touching
   // pairs; the active slots (floating pairs seeded from samples among them) are left out too.
   // Taken only if the settled configuration lies within it; else the first pass's is.
@@ -52,6 +56,24 @@ bool ServoLoop::AdoptClearances(const ClearanceMsg& m) {
   }
   return guard_.Adopt(
       q_, [&](int b) { return Eigen::Map<const contact::Vector7d>(m.q[b]); }, m.clearance);
+}
+
+bool ServoLoop::BoundSnappingParts() {
+  if (!(options_.max_part_speed > 0.0)) return false;
+  guard_.ClearBounds();
+  bool any = false;
+  for (const Slot& s : slots_) {
+    if (!s.plain || !s.state->active) continue;
+    const auto& st = static_cast<const optimizer::SurfaceContactTerm::State&>(*s.state);
+    if (!st.valid || st.ext.status != contact::ExtremalStatus::kConverged) continue;
+    const contact::RelativeCurvature rc = contact::RelativeCurvatureOf(st.eval);
+    if (!rc.valid || !(rc.eigenvalues[0] < kSnapCurvature * rc.eigenvalues[1])) continue;
+    const auto& term = *s.term;
+    if (term.body_a() >= 0) guard_.Bound(term.body_a(), true);
+    if (term.body_b() >= 0) guard_.Bound(term.body_b(), true);
+    any = true;
+  }
+  return any;
 }
 
 }  // namespace tangent::server

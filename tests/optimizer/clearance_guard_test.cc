@@ -138,5 +138,63 @@ TEST(ClearanceGuardTest, TheFractionIsTheLargestWithinEachPairsShare) {
   EXPECT_FALSE(guard.armed());
 }
 
+TEST(ClearanceGuardTest, TheMotionBoundHoldsMarkedBodiesOnlyAndIsTight) {
+  // The tick motion bound (SolverOptions::max_solve_motion): a marked body's points stay
+  // within the bound of where they were at q_ref along the whole step, the fraction is the
+  // largest that does, and unmarked bodies, armed or not, are left alone.
+  const Mechanism m = Bodies();
+  ClearanceGuard guard;
+  guard.Configure(m, {}, {0.0, 0.02, 0.01});
+  EXPECT_FALSE(guard.armed());
+  std::mt19937_64 rng(33);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const double bound = 5e-5;
+  int bounded = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    Eigen::VectorXd q = m.InitialCoordinates();
+    for (int b = 1; b <= 2; ++b) {
+      const int o = m.offset(b);
+      q.segment<3>(o) = 1e-3 * Eigen::Vector3d(n(rng), n(rng), n(rng));
+      q.segment<4>(o + 3) = RandomQuaternion(rng);
+    }
+    Eigen::VectorXd q_ref = q, step = Eigen::VectorXd::Zero(q.size());
+    for (int b = 1; b <= 2; ++b) {  // a start already partway out, a step of up to ~0.4 mm
+      const int o = m.offset(b);
+      q.segment<3>(o) += 1e-5 * Eigen::Vector3d(n(rng), n(rng), n(rng));
+      step.segment<3>(o) = 1e-4 * Eigen::Vector3d(n(rng), n(rng), n(rng));
+      step.segment<4>(o + 3) = 1e-2 * Eigen::Vector4d(n(rng), n(rng), n(rng), n(rng));
+    }
+    guard.ClearBounds();
+    EXPECT_EQ(guard.MotionFraction(q_ref, q, step, 1.0, bound), 1.0);  // nothing marked
+    guard.Bound(1, true);
+    const long before = testing::AllocationCount();
+    const double alpha = guard.MotionFraction(q_ref, q, step, 1.0, bound);
+    EXPECT_EQ(testing::AllocationCount() - before, 0);
+    if (guard.Motion(1, q_ref, q, step, 0.0) > bound) {
+      EXPECT_EQ(alpha, 0.0);  // already beyond: no step away from q_ref (μ only grows)
+      continue;
+    }
+    EXPECT_LE(guard.Motion(1, q_ref, q, step, alpha), bound);
+    if (alpha < 1.0) {
+      ++bounded;
+      EXPECT_GT(guard.Motion(1, q_ref, q, step, alpha + 1e-5), bound);
+    }
+    // Body 2 is not marked: however far it goes, it does not shorten the step.
+    Eigen::VectorXd far = step;
+    far.segment<3>(m.offset(2)) *= 100.0;
+    EXPECT_EQ(guard.MotionFraction(q_ref, q, far, 1.0, bound), alpha);
+    // Every point within the reach stays within the bound at the fraction's end.
+    const Eigen::VectorXd end = q + alpha * step;
+    for (int k = 0; k < 20; ++k) {
+      const Eigen::Vector3d x =
+          0.02 * Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized() * std::abs(n(rng)) / 3.0;
+      if (x.norm() > 0.02) continue;
+      EXPECT_LE((Place(end, m.offset(1), x) - Place(q_ref, m.offset(1), x)).norm(),
+                bound * (1 + 1e-9));
+    }
+  }
+  EXPECT_GT(bounded, 50);  // the bound acted on a good share of the steps
+}
+
 }  // namespace
 }  // namespace tangent::optimizer
