@@ -7,6 +7,22 @@
 
 namespace tangent::optimizer {
 
+namespace {
+
+// The end of the admissible fractions [0, α*] ⊂ [0, hi] of a step whose motion only grows with
+// α (the segment only lengthens), by bisection to 2⁻²⁰ of hi: the largest α found admissible.
+template <class Admissible>
+double LargestFraction(double hi, Admissible&& admissible) {
+  double lo = 0.0;
+  for (int i = 0; i < 20; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (admissible(mid) ? lo : hi) = mid;
+  }
+  return lo;
+}
+
+}  // namespace
+
 void ClearanceGuard::Configure(const Mechanism& mechanism, std::vector<std::pair<int, int>> pairs,
                                std::vector<double> reach) {
   mechanism_ = &mechanism;
@@ -48,17 +64,11 @@ double ClearanceGuard::Motion(int b, const Eigen::VectorXd& q_ref, const Eigen::
 double ClearanceGuard::MotionFraction(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& q,
                                       const Eigen::VectorXd& step, double alpha,
                                       double bound) const {
-  // Each body's μ grows with α (the segment only lengthens): its admissible fractions are an
-  // interval [0, α_b]; the step's is the least of them.
+  // Each marked body's admissible fractions are an interval [0, α_b]; the step's is the least.
   for (size_t k = 0; k < reach_.size(); ++k) {
     const int b = static_cast<int>(k);
     if (!bounded_[k] || Motion(b, q_ref, q, step, alpha) <= bound) continue;
-    double lo = 0.0, hi = alpha;
-    for (int i = 0; i < 20; ++i) {
-      const double mid = 0.5 * (lo + hi);
-      (Motion(b, q_ref, q, step, mid) <= bound ? lo : hi) = mid;
-    }
-    alpha = lo;
+    alpha = LargestFraction(alpha, [&](double a) { return Motion(b, q_ref, q, step, a) <= bound; });
   }
   return alpha;
 }
@@ -78,18 +88,7 @@ bool ClearanceGuard::Within(const Eigen::VectorXd& q_ref, const std::vector<doub
 
 double ClearanceGuard::Fraction(const Eigen::VectorXd& q, const Eigen::VectorXd& step) const {
   if (!armed_ || Within(q_ref_, clearance_, q, step, 1.0)) return 1.0;
-  // μ grows with α (the segment only lengthens), so the admissible fractions are an interval
-  // [0, α*]: bisect for its end.
-  double lo = 0.0, hi = 1.0;
-  for (int i = 0; i < 20; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    if (Within(q_ref_, clearance_, q, step, mid)) {
-      lo = mid;
-    } else {
-      hi = mid;
-    }
-  }
-  return lo;
+  return LargestFraction(1.0, [&](double a) { return Within(q_ref_, clearance_, q, step, a); });
 }
 
 }  // namespace tangent::optimizer
