@@ -13,7 +13,10 @@
 //                            [--lines] [--reach]  (ServoOptions::line_contacts, step_reach)
 //                            [--iterations N]  (ServoOptions::max_iterations, default 10)
 //                            [--truth-every 50]  (ms between true-gap checks; 0: none)
+//                            [--pass-every 4]  (ms between global passes; tangentd's stage
+//                                               thread passes about every 1.1 ms)
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -48,11 +51,14 @@ int main(int argc, char** argv) {
   const auto scene = LoadScene(std::string(TANGENT_SCENES_DIR) + "/paperclips.json");
   ServoOptions options;
   int truth_every = 50;  // device steps (ms) between ground-truth gap checks; 0: none
+  int pass_every = 4;    // device steps (ms) between global passes
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
     if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
     if (!std::strcmp(argv[i], "--truth-every") && i + 1 < argc)
       truth_every = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--pass-every") && i + 1 < argc)
+      pass_every = std::max(1, std::atoi(argv[i + 1]));
     if (!std::strcmp(argv[i], "--iterations") && i + 1 < argc)
       options.max_iterations = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--enter") && i + 1 < argc)
@@ -144,7 +150,7 @@ int main(int argc, char** argv) {
       }
       std::printf("\n");
     }
-    if (k % 4 == 3) {
+    if (k % pass_every == pass_every - 1) {
       link.PassInto(&servo, snap, [&](const ContactEventMsg& m, bool ok) {
         events += ok;
         if (trace) {

@@ -743,7 +743,9 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
     double alpha = options_.step_reach ? ReachFraction(problem_, data(), q, step_) : 1.0;
     if (guard_ && guard_->armed()) alpha = std::min(alpha, guard_->Fraction(q, step_));
     if (guard_ && options_.max_solve_motion > 0.0) {
+      const double unbounded = alpha;
       alpha = guard_->MotionFraction(q_prev_, q, step_, alpha, options_.max_solve_motion);
+      if (alpha < unbounded) ++st.motion_bounded_steps;
     }
     // Trials start from q's contact states: a rejected trial's (a contact re-solved onto another
     // branch of its pair, far along a step the line search then halves) must not be where the

@@ -104,6 +104,8 @@ struct SolveStats {
   /// The input was not finite (a coordinate, or a goal target / term at the start point): no
   /// step was taken, q and the multipliers are as they came, the residuals are +inf.
   bool invalid_input = false;
+  /// Newton steps the solve motion bound shortened (SolverOptions::max_solve_motion).
+  int motion_bounded_steps = 0;
   /// Second-order check (only with SolverOptions::second_order_check): the Lagrangian's Hessian
   /// restricted to the null space of the active constraints' Jacobian is positive definite
   /// (a strict local minimum, not a saddle), and its smallest eigenvalue.

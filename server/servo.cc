@@ -545,12 +545,18 @@ bool ServoLoop::MoveScene(const DeviceSample* fresh_device, double dt, const Inj
   if (inject.stage == InjectedFault::kGoal) target_[0] = inject.value;
   optimizer::SolveStats st;
   const TrackingCounts before = Tracking();
+  out->bounded = false;
   if (!fault && target_.allFinite() && target_.norm() <= options_.fault_distance) {
     grasp_state_->target = target_;
     if (grasp_orientation_state_)
       grasp_orientation_state_->R_target = orientation_target_.toRotationMatrix();
-    solver_->set_max_solve_motion(BoundSnappingParts() ? options_.max_part_speed * dt : 0.0);
+    // The bound's time is the follow's (at most kFollowStepTime); the first tick, which has no
+    // time step yet, gets that much too rather than no bound.
+    const double h = dt > 0.0 ? std::min(dt, kFollowStepTime) : kFollowStepTime;
+    out->bounded = BoundSnappingParts();
+    solver_->set_max_solve_motion(out->bounded ? options_.max_part_speed * h : 0.0);
     st = solver_->Solve(&q_);
+    bound_lagging_ = out->bounded && st.motion_bounded_steps > 0;
     if (inject.stage == InjectedFault::kSolverResult) q_[0] = inject.value;
     fault = !Sane(st);
   } else {

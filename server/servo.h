@@ -69,9 +69,10 @@ struct ServoOptions {
   /// m/s: a part one of whose contacts is near a pitchfork of its distance (λ_min of the
   /// relative curvature below a tenth of λ_max at the tick's start: a clip turning towards
   /// parallel in another's hook, free to turn) moves no point faster than this, times the
-  /// tick's own time step, in that tick's solve (optimizer::SolverOptions::max_solve_motion;
-  /// 0: no bound). Without it one solve moved such a clip 3.4 mm, through the other's wire
-  /// (docs/reliability.md, "Soak"). 0.2 m/s is 40 times the demo's drag.
+  /// tick's own time step (at most 2 ms, as the follow's; 2 ms on the first tick), in that
+  /// tick's solve (optimizer::SolverOptions::max_solve_motion; 0: no bound). Without it one
+  /// solve moved such a clip 3.4 mm, through the other's wire (docs/reliability.md, "Soak").
+  /// 0.2 m/s is 40 times the demo's drag.
   double max_part_speed = 0.2;
 };
 
@@ -97,6 +98,9 @@ struct TickResult {
   /// needed a full extremal solve, and tracker steps that reported `lost` (each then re-solved
   /// from the last parameters: a defined event, counted, never a silent jump).
   int64_t tracked = 0, solves = 0, lost = 0;
+  /// This tick's solve bounded the motion of parts near a pitchfork of a contact's distance
+  /// (ServoOptions::max_part_speed).
+  bool bounded = false;
 };
 
 class ServoLoop {
@@ -264,7 +268,8 @@ class ServoLoop {
   /// placed), lines follow, and lines no longer line-like resume their point contact (lines_).
   void FollowLines();
   /// Marks for the tick motion bound the bodies of contacts near a pitchfork of their distance
-  /// (ServoOptions::max_part_speed); false when none is.
+  /// (ServoOptions::max_part_speed), and keeps those of the last tick marked while its bound
+  /// held them back (bound_lagging_); false when none is.
   bool BoundSnappingParts();
   /// λ_min / λ_max below which a contact is near a pitchfork (BoundSnappingParts): the line
   /// contacts' entry ratio (LineContactOptions::enter).
@@ -296,7 +301,11 @@ class ServoLoop {
   int64_t last_timeout_ns_ = 0;      ///< server time of the last timeout wrench
   DeviceSample last_answered_;       ///< echoed by timeout wrenches
   bool timeout_final_sent_ = false;  ///< the zero-force timeout wrench has gone
-  double good_violation_ = 0.0;      ///< violation of the last good tick
+  /// The last tick's motion bound shortened a step: its parts lag where the solve would take
+  /// them, and stay bounded until they have caught up (else the first tick without the bound
+  /// moves them the whole lag at once: 1.65 mm through the other wire, SnapTest).
+  bool bound_lagging_ = false;
+  double good_violation_ = 0.0;  ///< violation of the last good tick
   // The coupling (T the tool point, G the grasp point, D the device frame; device units): the
   // last p_TG_D, and the wrench on the hand after the rate limit, f_D_ (N) and tau_D_ (N·m).
   Eigen::Vector3d p_TG_D_prev_ = Eigen::Vector3d::Zero();

@@ -60,8 +60,8 @@ bool ServoLoop::AdoptClearances(const ClearanceMsg& m) {
 
 bool ServoLoop::BoundSnappingParts() {
   if (!(options_.max_part_speed > 0.0)) return false;
-  guard_.ClearBounds();
-  bool any = false;
+  if (!bound_lagging_) guard_.ClearBounds();
+  bool any = bound_lagging_;
   for (const Slot& s : slots_) {
     if (!s.plain || !s.state->active) continue;
     const auto& st = static_cast<const optimizer::SurfaceContactTerm::State&>(*s.state);
