@@ -15,6 +15,9 @@
 //                            [--truth-every 50]  (ms between true-gap checks; 0: none)
 //                            [--pass-every 4]  (ms between global passes; tangentd's stage
 //                                               thread passes about every 1.1 ms)
+//                            [--jitter SEED]  (as a real-time run's: each tick ±20 % of its
+//                                              250 µs, each pass skipped with probability 0.2)
+//                            [--max-part-speed 0.2]  (ServoOptions::max_part_speed, m/s)
 
 #include <algorithm>
 #include <chrono>
@@ -22,6 +25,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <random>
 #include <string>
 
 #include <Eigen/Core>
@@ -52,11 +56,15 @@ int main(int argc, char** argv) {
   ServoOptions options;
   int truth_every = 50;  // device steps (ms) between ground-truth gap checks; 0: none
   int pass_every = 4;    // device steps (ms) between global passes
+  int jitter = 0;        // seed of the tick and pass jitter; 0: none
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
     if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
     if (!std::strcmp(argv[i], "--truth-every") && i + 1 < argc)
       truth_every = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--jitter") && i + 1 < argc) jitter = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--max-part-speed") && i + 1 < argc)
+      options.max_part_speed = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--pass-every") && i + 1 < argc)
       pass_every = std::max(1, std::atoi(argv[i + 1]));
     if (!std::strcmp(argv[i], "--iterations") && i + 1 < argc)
@@ -96,6 +104,9 @@ int main(int argc, char** argv) {
     centre.push_back(tangent::testing::SampleCentreline(surface.surface, 0, 4000));
   }
   double truest = INFINITY, truest_at = 0.0;
+  std::mt19937 rng(static_cast<unsigned>(jitter));
+  std::uniform_real_distribution<double> tick_jitter(-50'000.0, 50'000.0);  // ns
+  std::bernoulli_distribution skip_pass(0.2);
   for (int64_t k = 0; k < static_cast<int64_t>(seconds / dt); ++k) {
     const double t = dt * static_cast<double>(k);
     const Eigen::Vector3d rendered = watchdog.Step(t, dt, wrench, received);
@@ -113,7 +124,7 @@ int main(int argc, char** argv) {
     s.orientation[0] = 1.0;
     for (int tick = 0; tick < 4; ++tick) {
       servo.Tick(&s, now, &r);
-      now += 250'000;
+      now += jitter ? 250'000 + static_cast<int64_t>(tick_jitter(rng)) : 250'000;
       worst_violation = std::max(worst_violation, r.violation);
       if (jammed_at < 0.0 && r.violation > kHeldViolation) {
         jammed_at = t;
@@ -150,7 +161,7 @@ int main(int argc, char** argv) {
       }
       std::printf("\n");
     }
-    if (k % pass_every == pass_every - 1) {
+    if (k % pass_every == pass_every - 1 && !(jitter && skip_pass(rng))) {
       link.PassInto(&servo, snap, [&](const ContactEventMsg& m, bool ok) {
         events += ok;
         if (trace) {

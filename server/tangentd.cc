@@ -61,6 +61,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.001, 10.0));
   app.add_option("--iterations", eo.servo.max_iterations, "solver iterations per tick")
       ->check(CLI::Range(1, 100));
+  app.add_option("--max-part-speed", eo.servo.max_part_speed,
+                 "fastest a part near a pitchfork of a contact's distance moves in a tick's "
+                 "solve, m/s (0: no bound)")
+      ->check(CLI::Range(0.0, 100.0));
   app.add_option("--lcm-url", url, "LCM URL (default: multicast with ttl=0 on a private group)");
   app.add_option("--view-lcm-url", bo.view_url,
                  "LCM URL for viewers: scene, contacts, statistics, and the last wrench and "
