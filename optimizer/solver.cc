@@ -594,6 +594,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
   objective_known_ = false;  // (E depends on q_prev_ through least astonishment)
   SolveStats st;
   indefinite_steps_ = 0;
+  int marks = -1;  // the motion marker's answer, asked at the first bounded step (-1: not yet)
   ev_.Evaluate(q);
   // Primal-dual augmented Lagrangian (stabilized SQP): Newton on
   //   ∇E − J_Eᵀλ_E − J_Iᵀλ_I = 0,   c_E + (λ_E − λ̄_E)/μ = 0   (and PHR-shifted inequalities)
@@ -742,7 +743,11 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
     const double slope = design ? kkt_.dot(step_) : 0.0;
     double alpha = options_.step_reach ? ReachFraction(problem_, data(), q, step_) : 1.0;
     if (guard_ && guard_->armed()) alpha = std::min(alpha, guard_->Fraction(q, step_));
-    if (guard_ && options_.max_solve_motion > 0.0) {
+    if (guard_ && options_.max_solve_motion > 0.0 && marks < 0) {
+      marks = !motion_marker_ || motion_marker_(motion_context_);
+      st.motion_marked = marks && motion_marker_;
+    }
+    if (guard_ && options_.max_solve_motion > 0.0 && marks > 0) {
       const double unbounded = alpha;
       alpha = guard_->MotionFraction(q_prev_, q, step_, alpha, options_.max_solve_motion);
       if (alpha < unbounded) ++st.motion_bounded_steps;

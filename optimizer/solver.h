@@ -45,8 +45,9 @@ struct SolverOptions {
   /// Solve motion bound (m; 0: none): every Newton step is shortened so that no point of a body
   /// the clearance guard marks (ClearanceGuard::Bound; within the body's reach from its origin)
   /// ends farther than this from where it was at the solve's anchor (ClearanceGuard::Motion).
-  /// Needs the clearance guard (set_clearance_guard). The servo marks the bodies of contacts
-  /// near a pitchfork of their distance (ServoOptions::max_part_speed).
+  /// Needs the clearance guard (set_clearance_guard). The bodies are marked once a solve, when
+  /// it first steps (Solver::set_motion_marker); the servo marks those of contacts near a
+  /// pitchfork of their distance (ServoOptions::max_part_speed).
   double max_solve_motion = 0.0;
   /// Newton steps per iteration while the inequalities' active set changes (its guess from the
   /// multipliers, then its corrections from the linearized constraints after the step).
@@ -104,7 +105,9 @@ struct SolveStats {
   /// The input was not finite (a coordinate, or a goal target / term at the start point): no
   /// step was taken, q and the multipliers are as they came, the residuals are +inf.
   bool invalid_input = false;
-  /// Newton steps the solve motion bound shortened (SolverOptions::max_solve_motion).
+  /// The motion marker marked bodies for this solve's steps (Solver::set_motion_marker), and
+  /// the Newton steps the solve motion bound shortened (SolverOptions::max_solve_motion).
+  bool motion_marked = false;
   int motion_bounded_steps = 0;
   /// Second-order check (only with SolverOptions::second_order_check): the Lagrangian's Hessian
   /// restricted to the null space of the active constraints' Jacobian is positive definite
@@ -170,6 +173,15 @@ class Solver {
   void set_clearance_guard(const ClearanceGuard* guard) { guard_ = guard; }
   /// SolverOptions::max_solve_motion for the next solves (the servo's, each tick).
   void set_max_solve_motion(double bound) { options_.max_solve_motion = bound; }
+  /// Marks the clearance guard's bodies for the motion bound (ClearanceGuard::Bound) and says
+  /// whether any is marked. Called at most once a solve, just before its first step is bounded,
+  /// with the solve's start evaluated: a solve that takes no step (most of a servo's) pays
+  /// nothing for it. Allocation free as the marker is. nullptr: the marks as they stand.
+  using MotionMarker = bool (*)(void* context);
+  void set_motion_marker(MotionMarker marker, void* context) {
+    motion_marker_ = marker;
+    motion_context_ = context;
+  }
   /// This solver's per-solve data of the problem: goal targets, tracked contacts (the Problem
   /// is shared and never changed; several solvers of one problem may run on different threads).
   ProblemData& data() { return ev_.data(); }
@@ -237,6 +249,8 @@ class Solver {
   const Problem& problem_;
   SolverOptions options_;
   const ClearanceGuard* guard_ = nullptr;
+  MotionMarker motion_marker_ = nullptr;
+  void* motion_context_ = nullptr;
   int n_ = 0;
   ProblemEvaluator ev_;
   BlockMatrix H_;

@@ -545,18 +545,17 @@ bool ServoLoop::MoveScene(const DeviceSample* fresh_device, double dt, const Inj
   if (inject.stage == InjectedFault::kGoal) target_[0] = inject.value;
   optimizer::SolveStats st;
   const TrackingCounts before = Tracking();
-  out->bounded = false;
   if (!fault && target_.allFinite() && target_.norm() <= options_.fault_distance) {
     grasp_state_->target = target_;
     if (grasp_orientation_state_)
       grasp_orientation_state_->R_target = orientation_target_.toRotationMatrix();
     // The bound's time is the follow's (at most kFollowStepTime); the first tick, which has no
-    // time step yet, gets that much too rather than no bound.
+    // time step yet, gets that much too rather than no bound. The parts it bounds are marked
+    // when the solve first steps (BoundSnappingParts, the solver's motion marker).
     const double h = dt > 0.0 ? std::min(dt, kFollowStepTime) : kFollowStepTime;
-    out->bounded = BoundSnappingParts();
-    solver_->set_max_solve_motion(out->bounded ? options_.max_part_speed * h : 0.0);
+    solver_->set_max_solve_motion(std::max(0.0, options_.max_part_speed) * h);
     st = solver_->Solve(&q_);
-    bound_lagging_ = out->bounded && st.motion_bounded_steps > 0;
+    bound_lagging_ = st.motion_bounded_steps > 0;
     if (inject.stage == InjectedFault::kSolverResult) q_[0] = inject.value;
     fault = !Sane(st);
   } else {
@@ -578,6 +577,7 @@ bool ServoLoop::MoveScene(const DeviceSample* fresh_device, double dt, const Inj
   }
   out->fault = fault;
   out->iterations = st.iterations;
+  out->bounded = st.motion_marked;
   out->kkt = st.kkt_residual;
   out->num_contacts = active_contacts();
   const TrackingCounts after = Tracking();

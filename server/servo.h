@@ -98,8 +98,8 @@ struct TickResult {
   /// needed a full extremal solve, and tracker steps that reported `lost` (each then re-solved
   /// from the last parameters: a defined event, counted, never a silent jump).
   int64_t tracked = 0, solves = 0, lost = 0;
-  /// This tick's solve bounded the motion of parts near a pitchfork of a contact's distance
-  /// (ServoOptions::max_part_speed).
+  /// This tick's solve stepped with parts near a pitchfork of a contact's distance marked for
+  /// the motion bound (ServoOptions::max_part_speed).
   bool bounded = false;
 };
 

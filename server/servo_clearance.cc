@@ -29,6 +29,8 @@ void ServoLoop::StartClearanceGuard(const contact::GlobalContactStage& stage,
   if (options_.clearance_guard || options_.max_part_speed > 0.0) {
     solver_->set_clearance_guard(&guard_);
   }
+  solver_->set_motion_marker(
+      [](void* servo) { return static_cast<ServoLoop*>(servo)->BoundSnappingParts(); }, this);
   if (!options_.clearance_guard) return;
   // The first certificate, from the cold pass at the initial poses. The pass found the touching
   // pairs; the active slots (floating pairs seeded from samples among them) are left out too.

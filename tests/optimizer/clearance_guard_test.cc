@@ -12,6 +12,8 @@
 
 #include <Eigen/Geometry>
 
+#include "optimizer/goals.h"
+#include "optimizer/solver.h"
 #include "testing/alloc_counter.h"
 
 namespace tangent::optimizer {
@@ -194,6 +196,60 @@ TEST(ClearanceGuardTest, TheMotionBoundHoldsMarkedBodiesOnlyAndIsTight) {
     }
   }
   EXPECT_GT(bounded, 50);  // the bound acted on a good share of the steps
+}
+
+TEST(ClearanceGuardTest, TheSolverAsksForItsMarksOnceWhenItStepsAndKeepsToTheBound) {
+  // A free body pulled 10 mm by a goal, the solve motion bound 1 mm: the marker is asked once,
+  // at the first step; the body ends within the bound of where it started. A solve that takes
+  // no step never asks; a marker that marks nothing leaves the solve unbounded.
+  const Mechanism m = Bodies();
+  ClearanceGuard guard;
+  guard.Configure(m, {}, {0.0, 0.02, 0.02});
+  Problem p(m);
+  p.AddObjective(PositionGoal({1, {0, 0, 0}}, {0.01, 0, 0}), 1.0);
+  SolverOptions options;
+  options.max_solve_motion = 1e-3;
+  Solver solver(p, options);
+  solver.set_clearance_guard(&guard);
+  struct Marker {
+    ClearanceGuard* guard;
+    bool mark;
+    int calls = 0;
+  } marker{&guard, true};
+  solver.set_motion_marker(
+      [](void* c) {
+        auto* k = static_cast<Marker*>(c);
+        ++k->calls;
+        k->guard->ClearBounds();
+        k->guard->Bound(1, k->mark);
+        return k->mark;
+      },
+      &marker);
+  const Eigen::VectorXd start = m.InitialCoordinates();
+  Eigen::VectorXd q = start;
+  const long before = testing::AllocationCount();
+  SolveStats st = solver.Solve(&q);
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
+  EXPECT_EQ(marker.calls, 1);
+  EXPECT_TRUE(st.motion_marked);
+  EXPECT_GT(st.motion_bounded_steps, 0);
+  EXPECT_LE(guard.Motion(1, start, q, q, 0.0), 1e-3 * (1 + 1e-9));
+  EXPECT_GT(guard.Motion(1, start, q, q, 0.0), 0.99e-3);  // as far as the bound lets it
+  // At the goal: no step, no question.
+  Eigen::VectorXd at_goal = start;
+  at_goal[m.offset(1)] = 0.01;
+  marker.calls = 0;
+  st = solver.Solve(&at_goal);
+  EXPECT_EQ(marker.calls, 0);
+  EXPECT_FALSE(st.motion_marked);
+  // Nothing marked: the whole way (less the step penalty's 0.1 %: least astonishment 1e-3).
+  marker.mark = false;
+  q = start;
+  st = solver.Solve(&q);
+  EXPECT_EQ(marker.calls, 1);
+  EXPECT_FALSE(st.motion_marked);
+  EXPECT_EQ(st.motion_bounded_steps, 0);
+  EXPECT_NEAR(q[m.offset(1)], 0.01 / (1 + 1e-3), 1e-9);
 }
 
 }  // namespace
