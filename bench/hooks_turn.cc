@@ -15,12 +15,16 @@
 //                            [--period 8] (s, the turn's; its peak rate is 40° × 2π / period)
 //                            [--pass-every 1] (device steps, 1 ms each, between global passes)
 //                            [--trace-from T] (every 10th device step's contacts and sections)
+//                            [--jitter SEED] (as a real-time run's, chain_soak's: each tick
+//                                             ±20 % of its 250 µs, each pass skipped with
+//                                             probability 0.2)
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <numbers>
+#include <random>
 
 #include <Eigen/Geometry>
 
@@ -35,6 +39,7 @@ using namespace tangent::server;
 int main(int argc, char** argv) {
   double seconds = 11.0, trace_from = 1e9, period = 8.0;
   int pass_every = 1;
+  int jitter = 0;  // seed of the tick and pass jitter; 0: none
   ServoOptions options;
   options.dof = 6;
   for (int i = 1; i < argc; ++i) {
@@ -44,6 +49,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
     if (!std::strcmp(argv[i], "--period") && i + 1 < argc) period = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--pass-every") && i + 1 < argc) pass_every = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--jitter") && i + 1 < argc) jitter = std::atoi(argv[i + 1]);
   }
   if (!(period > 0.0) || pass_every < 1) {
     std::fprintf(stderr, "hooks_turn: --period must be > 0 s and --pass-every >= 1\n");
@@ -60,6 +66,9 @@ int main(int argc, char** argv) {
   // The rings' true gap (tangent::testing::HooksTrueGap), every 10 ms.
   double deepest = INFINITY, deepest_at = 0.0;
   Eigen::Vector3d last = Eigen::Vector3d::Zero();
+  std::mt19937 rng(static_cast<unsigned>(jitter));
+  std::uniform_real_distribution<double> tick_jitter(-50'000.0, 50'000.0);  // ns
+  std::bernoulli_distribution skip_pass(0.2);
   std::printf(
       "hooks_turn: %.0f s, turn period %.1f s (peak %.1f deg/s), a global pass every %d ms, line "
       "contacts %s, step reach %s\n",
@@ -71,11 +80,11 @@ int main(int argc, char** argv) {
     const double angle = 2 * std::atan2(s.orientation[1], s.orientation[0]);  // (turn about x)
     for (int tick = 0; tick < 4; ++tick) {
       servo.Tick(&s, now, &r);
-      now += 250'000;
+      now += jitter ? 250'000 + static_cast<int64_t>(tick_jitter(rng)) : 250'000;
       worst = std::max(worst, r.violation);
     }
     servo.FillSnapshot(&snap);
-    if (step % pass_every == 0) link.PassInto(&servo, snap);
+    if (step % pass_every == 0 && !(jitter && skip_pass(rng))) link.PassInto(&servo, snap);
     const Eigen::Vector3d f(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
     largest_step = std::max(largest_step, (f - last).norm());
     last = f;
