@@ -25,7 +25,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <random>
 #include <string>
 
 #include <Eigen/Core>
@@ -35,6 +34,7 @@
 #include "server/phantom.h"
 #include "server/scene.h"
 #include "server/servo.h"
+#include "testing/drag_path.h"
 #include "testing/tube_gap.h"
 
 using namespace tangent::server;
@@ -104,9 +104,7 @@ int main(int argc, char** argv) {
     centre.push_back(tangent::testing::SampleCentreline(surface.surface, 0, 4000));
   }
   double truest = INFINITY, truest_at = 0.0;
-  std::mt19937 rng(static_cast<unsigned>(jitter));
-  std::uniform_real_distribution<double> tick_jitter(-50'000.0, 50'000.0);  // ns
-  std::bernoulli_distribution skip_pass(0.2);
+  tangent::bench::TimingJitter timing(jitter);
   for (int64_t k = 0; k < static_cast<int64_t>(seconds / dt); ++k) {
     const double t = dt * static_cast<double>(k);
     const Eigen::Vector3d rendered = watchdog.Step(t, dt, wrench, received);
@@ -124,7 +122,7 @@ int main(int argc, char** argv) {
     s.orientation[0] = 1.0;
     for (int tick = 0; tick < 4; ++tick) {
       servo.Tick(&s, now, &r);
-      now += jitter ? 250'000 + static_cast<int64_t>(tick_jitter(rng)) : 250'000;
+      now += timing.TickNs();
       worst_violation = std::max(worst_violation, r.violation);
       if (jammed_at < 0.0 && r.violation > kHeldViolation) {
         jammed_at = t;
@@ -161,7 +159,7 @@ int main(int argc, char** argv) {
       }
       std::printf("\n");
     }
-    if (k % pass_every == pass_every - 1 && !(jitter && skip_pass(rng))) {
+    if (k % pass_every == pass_every - 1 && !timing.SkipPass()) {
       link.PassInto(&servo, snap, [&](const ContactEventMsg& m, bool ok) {
         events += ok;
         if (trace) {

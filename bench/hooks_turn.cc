@@ -24,7 +24,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <numbers>
-#include <random>
 
 #include <Eigen/Geometry>
 
@@ -66,9 +65,7 @@ int main(int argc, char** argv) {
   // The rings' true gap (tangent::testing::HooksTrueGap), every 10 ms.
   double deepest = INFINITY, deepest_at = 0.0;
   Eigen::Vector3d last = Eigen::Vector3d::Zero();
-  std::mt19937 rng(static_cast<unsigned>(jitter));
-  std::uniform_real_distribution<double> tick_jitter(-50'000.0, 50'000.0);  // ns
-  std::bernoulli_distribution skip_pass(0.2);
+  tangent::bench::TimingJitter timing(jitter);
   std::printf(
       "hooks_turn: %.0f s, turn period %.1f s (peak %.1f deg/s), a global pass every %d ms, line "
       "contacts %s, step reach %s\n",
@@ -80,11 +77,11 @@ int main(int argc, char** argv) {
     const double angle = 2 * std::atan2(s.orientation[1], s.orientation[0]);  // (turn about x)
     for (int tick = 0; tick < 4; ++tick) {
       servo.Tick(&s, now, &r);
-      now += jitter ? 250'000 + static_cast<int64_t>(tick_jitter(rng)) : 250'000;
+      now += timing.TickNs();
       worst = std::max(worst, r.violation);
     }
     servo.FillSnapshot(&snap);
-    if (step % pass_every == 0 && !(jitter && skip_pass(rng))) link.PassInto(&servo, snap);
+    if (step % pass_every == 0 && !timing.SkipPass()) link.PassInto(&servo, snap);
     const Eigen::Vector3d f(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
     largest_step = std::max(largest_step, (f - last).norm());
     last = f;

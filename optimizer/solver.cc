@@ -743,13 +743,15 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
     const double slope = design ? kkt_.dot(step_) : 0.0;
     double alpha = options_.step_reach ? ReachFraction(problem_, data(), q, step_) : 1.0;
     if (guard_ && guard_->armed()) alpha = std::min(alpha, guard_->Fraction(q, step_));
-    if (guard_ && options_.max_solve_motion > 0.0 && marks < 0) {
-      marks = !motion_marker_ || motion_marker_(motion_context_);
-      st.motion_marked = marks && motion_marker_;
-    }
-    if (guard_ && options_.max_solve_motion > 0.0 && marks > 0) {
+    if (guard_ && options_.max_solve_motion > 0.0) {
+      if (marks < 0) {
+        marks = !motion_marker_ || motion_marker_(motion_context_);
+        st.motion_marked = marks && motion_marker_;
+      }
       const double unbounded = alpha;
-      alpha = guard_->MotionFraction(q_prev_, q, step_, alpha, options_.max_solve_motion);
+      if (marks > 0) {
+        alpha = guard_->MotionFraction(q_prev_, q, step_, alpha, options_.max_solve_motion);
+      }
       if (alpha < unbounded) ++st.motion_bounded_steps;
     }
     // Trials start from q's contact states: a rejected trial's (a contact re-solved onto another

@@ -61,7 +61,7 @@ bool ServoLoop::AdoptClearances(const ClearanceMsg& m) {
 }
 
 bool ServoLoop::BoundSnappingParts() {
-  if (!(options_.max_part_speed > 0.0)) return false;
+  // (Asked only by a solve with a motion bound: max_part_speed > 0.)
   if (!bound_lagging_) guard_.ClearBounds();
   bool any = bound_lagging_;
   for (const Slot& s : slots_) {

@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
+#include <random>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -13,6 +15,23 @@
 #include "server/servo.h"
 
 namespace tangent::bench {
+
+/// A real-time run's timing offline (chain_soak and hooks_turn --jitter SEED): each servo tick
+/// 250 µs ± 20 %, each global pass skipped with probability 0.2. Seed 0: none (every tick
+/// 250 µs, every pass run).
+class TimingJitter {
+ public:
+  explicit TimingJitter(int seed) : on_(seed != 0), rng_(static_cast<unsigned>(seed)) {}
+  /// The next tick's time step (ns).
+  int64_t TickNs() { return on_ ? 250'000 + static_cast<int64_t>(tick_(rng_)) : 250'000; }
+  bool SkipPass() { return on_ && skip_(rng_); }
+
+ private:
+  bool on_;
+  std::mt19937 rng_;
+  std::uniform_real_distribution<double> tick_{-50'000.0, 50'000.0};
+  std::bernoulli_distribution skip_{0.2};
+};
 
 inline Eigen::Vector3d DragPath(double t) {
   const double lift = 6e-3 * std::min(1.0, t / 2.0);
