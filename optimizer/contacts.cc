@@ -9,6 +9,7 @@
 #include "contact/contact_jacobian.h"
 #include "contact/relative_curvature.h"
 #include "contact/rigid.h"
+#include "optimizer/split_rows.h"
 
 namespace tangent::optimizer {
 
@@ -125,6 +126,7 @@ std::unique_ptr<TermState> SurfaceContactTerm::MakeState() const {
   options.corrector_steps = tracking_.corrector_steps;
   auto st = std::make_unique<State>(*f_, *g_, options);
   st->u = seed_;
+  st->own_u = seed_;
   return st;
 }
 
@@ -181,6 +183,35 @@ void SurfaceContactTerm::Update(const std::vector<BodyPose>& poses, State* st) c
     st->tracking = !jumped &&
                    (undecided || st->ext.status == contact::ExtremalStatus::kConverged) &&
                    st->tracker.Reset(pf.q, pg.q, st->ext.u) == contact::TrackStatus::kTracked;
+  }
+  // A row of a split pair (a minimum either side of a saddle: keep_off_saddles) that Newton
+  // drew onto the saddle, or into the other minimum's basin (the saddle's and the other
+  // minimum's basins reach to within a few 1e-3 of its own just past a pitchfork), goes back to
+  // its own minimum: the one on the side of own_u, where it last ended on a minimum (held or
+  // undecided evaluations may drift across the saddle with the tracker).
+  const bool converged = st->ext.status == contact::ExtremalStatus::kConverged;
+  if (st->keep_off_saddles && converged) {
+    const contact::RelativeCurvature rc = contact::RelativeCurvatureOf(st->eval);
+    contact::SurfaceSurfaceExtremum m;
+    contact::SurfacePairEval me;
+    bool walked = false;
+    if (rc.valid && rc.crossing &&
+        internal::MinimumToward(*f_, pf, *g_, pg, st->ext, st->eval, rc, st->own_u, &m, &me)) {
+      walked = true;
+    } else if (rc.valid && !rc.crossing &&
+               contact::ParameterDistance(*f_, *g_, st->own_u, st->ext.u) > kHumpCheckStep &&
+               internal::MinimumOnOwnSide(*f_, pf, *g_, pg, st->ext, st->own_u, &m, &me)) {
+      walked = true;
+    }
+    if (walked) {
+      st->ext = m;
+      st->eval = me;
+      ++st->walks;
+      st->tracking = st->tracker.Reset(pf.q, pg.q, m.u) == contact::TrackStatus::kTracked;
+    }
+    if (walked || (rc.valid && !rc.crossing)) st->own_u = st->ext.u;
+  } else if (converged) {
+    st->own_u = st->ext.u;
   }
   st->u = st->ext.u;
   st->q_f = pf.q;

@@ -111,11 +111,24 @@ class SurfaceContactTerm final : public Term {
     }
     contact::SurfaceSurfaceExtremum ext;
     contact::SurfacePairEval eval;
+    /// Rows stay on their minimum (docs/contact.md, "Rows that stay on their minimum"): with
+    /// this set, an evaluation that ends on a saddle of the distance (past a pitchfork, Newton
+    /// from the predicted point may converge to the nearest stationary point:
+    /// RelativeCurvature::crossing) or on the minimum across the saddle goes back to the
+    /// minimum on own_u's side. The owner sets it while the pair has another row (the minima
+    /// of a split); a lone row is left to reach the saddle, where the global stage splits it.
+    /// Off, an evaluation costs no relative curvature.
+    bool keep_off_saddles = false;
+    /// The side the row keeps to: its parameters where an evaluation last ended on a minimum
+    /// (with keep_off_saddles; else on any converged extremum), or its seed.
+    Eigen::Vector4d own_u = Eigen::Vector4d::Zero();
+    int walks = 0;  ///< evaluations that went back to the row's own minimum
     const contact::SurfaceSurfaceExtremum& extremum() const override { return ext; }
     /// (The contact stands at u_new until the next evaluation: a second event before then is
     /// matched against it.)
     void Reseed(const Eigen::Vector4d& u_new) override {
       u = u_new;
+      own_u = u_new;
       ext.u = u_new;
       valid = false;
       tracking = false;
@@ -154,6 +167,10 @@ class SurfaceContactTerm final : public Term {
   bool Reach(const TermState* state, Eigen::Vector3d* p, double* reach) const override;
   /// The default ContactTracking::accept_residual.
   static constexpr double kTrackedResidual = 1e-12;
+  /// A row of a split pair whose evaluation moved its parameters farther than this (a fraction
+  /// of the domains, contact::ParameterDistance) is checked for a hump of the distance on the
+  /// way (Newton from beside a saddle may converge to the minimum across it).
+  static constexpr double kHumpCheckStep = 1e-4;
 
  private:
   friend class TrimmedContactTerm;  // measures its face contact through this term

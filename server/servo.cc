@@ -543,6 +543,7 @@ bool ServoLoop::MoveScene(const DeviceSample* fresh_device, double dt, const Inj
   // targets) and sends the force to zero.
   bool fault = fresh_device && !Follow(*fresh_device, dt);
   if (inject.stage == InjectedFault::kGoal) target_[0] = inject.value;
+  KeepSplitRowsOffSaddles();
   optimizer::SolveStats st;
   const TrackingCounts before = Tracking();
   if (!fault && target_.allFinite() && target_.norm() <= options_.fault_distance) {

@@ -271,6 +271,10 @@ class ServoLoop {
   /// (ServoOptions::max_part_speed), and keeps those of the last tick marked while its bound
   /// held them back (bound_lagging_); false when none is.
   bool BoundSnappingParts();
+  /// Before each solve: rows whose pair has another row (the minima of a split) keep to their
+  /// own minimum (SurfaceContactTerm::State::keep_off_saddles), lone rows do not. Allocation
+  /// free; nothing while no pair has two rows and no row changed.
+  void KeepSplitRowsOffSaddles();
   /// λ_min / λ_max below which a contact is near a pitchfork (BoundSnappingParts): the line
   /// contacts' entry ratio (LineContactOptions::enter).
   static constexpr double kSnapCurvature = 0.1;
@@ -305,6 +309,11 @@ class ServoLoop {
   /// them, and stay bounded until they have caught up (else the first tick without the bound
   /// moves them the whole lag at once: 1.65 mm through the other wire, SnapTest).
   bool bound_lagging_ = false;
+  /// KeepSplitRowsOffSaddles' bookkeeping: the plain rows changed since it last looked (an
+  /// event, a line pair's point retired or resumed), and whether some pair has two rows. While
+  /// neither holds it costs nothing.
+  bool rows_changed_ = true;
+  bool split_rows_ = false;
   double good_violation_ = 0.0;  ///< violation of the last good tick
   // The coupling (T the tool point, G the grasp point, D the device frame; device units): the
   // last p_TG_D, and the wrench on the hand after the rate limit, f_D_ (N) and tau_D_ (N·m).

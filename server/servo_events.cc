@@ -1,5 +1,6 @@
 // The servo's contact events from the global stage (ServoLoop::Apply): which slot, line or face
-// pair an added or removed contact belongs to. Split from servo.cc by concept.
+// pair an added or removed contact belongs to; and the rows of split pairs between events
+// (KeepSplitRowsOffSaddles). Split from servo.cc by concept.
 
 #include "server/servo.h"
 
@@ -18,6 +19,7 @@ constexpr double kSameContactParameters = 1e-6;
 }  // namespace
 
 bool ServoLoop::Apply(const ContactEventMsg& e) {
+  rows_changed_ = true;
   const int lo = std::min(e.surface_a, e.surface_b), hi = std::max(e.surface_a, e.surface_b);
   const Eigen::Vector4d u(e.u[0], e.u[1], e.u[2], e.u[3]);
   if (const int k = faces_.Find(lo, hi); k >= 0) {
@@ -86,6 +88,22 @@ bool ServoLoop::Apply(const ContactEventMsg& e) {
   if (free->body_term && !free->Target(lo, hi)) return false;
   free->Activate(u);
   return true;
+}
+
+void ServoLoop::KeepSplitRowsOffSaddles() {
+  if (!rows_changed_ && !split_rows_) return;
+  rows_changed_ = false;
+  split_rows_ = false;
+  for (const Slot& s : slots_) {
+    if (!s.plain) continue;
+    int rows = 0;
+    for (const Slot& o : slots_) {
+      rows +=
+          o.plain && o.state->active && o.surface_a == s.surface_a && o.surface_b == s.surface_b;
+    }
+    static_cast<optimizer::SurfaceContactTerm::State&>(*s.state).keep_off_saddles = rows > 1;
+    split_rows_ = split_rows_ || rows > 1;
+  }
 }
 
 }  // namespace tangent::server

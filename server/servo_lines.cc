@@ -18,7 +18,10 @@ void ServoLoop::FollowLines() {
     // Entered a tick ago: the sections have taken the load beside the point contacts along the
     // line (one solve with both), which are retired now.
     for (Slot& o : slots_) {
-      if (o.line == k && o.state->active && lines_.Covers(k, o.U())) o.state->Deactivate();
+      if (o.line == k && o.state->active && lines_.Covers(k, o.U())) {
+        o.state->Deactivate();
+        rows_changed_ = true;
+      }
     }
   }
   // A line-like point contact: the pair goes to line mode; its contacts along the line stay for
@@ -37,6 +40,7 @@ void ServoLoop::ResumePoint(int line, const Eigen::Vector4d& u) {
   for (Slot& s : slots_) {
     if (s.line == line && !s.state->active) {
       s.Activate(u);
+      rows_changed_ = true;
       return;
     }
   }
