@@ -28,6 +28,8 @@ Eigen::Vector4d ShortWay(const contact::internal::PairBox& box, const Eigen::Vec
   return d;
 }
 
+// The point-surface distance from f's point at x's first two parameters to g, from x's last two
+// (the height of the distance over f's parameters); +inf when that solve does not converge.
 double HeightAt(const nurbs::NurbsSurface& f, const BodyPose& pf, const nurbs::NurbsSurface& g,
                 const BodyPose& pg, const Eigen::Vector4d& x) {
   const Eigen::Vector3d p_W = pf.Point(f.Evaluate(x[0], x[1], 0).S);
@@ -77,9 +79,6 @@ bool MinimumToward(const nurbs::NurbsSurface& f, const BodyPose& pf, const nurbs
   *out = e;
   return true;
 }
-
-// The point-surface distance from f's point at x's first two parameters to g, from x's last two
-// (the height of the distance over f's parameters); +inf when that solve does not converge.
 
 // A row of a split pair (one minimum either side of a saddle) whose evaluation converged to a
 // minimum `across` the saddle from its own: Newton, from beside the saddle, stepped into the
