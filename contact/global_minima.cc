@@ -26,34 +26,14 @@ void MinimaBeside(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
                   const SurfaceSurfaceExtremum& saddle, const SurfacePairEval& at,
                   const RelativeCurvature& rc, const GlobalOptions& options, int a, int b,
                   std::vector<GlobalContact>* out) {
-  const double radius = 1.0 / std::max(rc.eigenvalues.cwiseAbs().maxCoeff(), 1e-300);
-  const Eigen::Vector4d step = ParameterStepAlong(at, rc.min_direction);
-  if (!step.allFinite()) return;
-  const PairBox box = PairBoxOf(f, g);
   for (const double side : {1.0, -1.0}) {
-    // Walk: ξ = 1 %, 2 %, 4 % ... of the radius (up to 2 radii) while the distance falls.
-    Eigen::Vector4d best = saddle.u;
-    double best_distance = saddle.beta;
-    for (double xi = 0.01 * radius; xi <= 2.0 * radius; xi *= 2.0) {
-      const Eigen::Vector4d x =
-          ClampOrWrap<4>(saddle.u + side * xi * step, box.lo, box.hi, box.periodic);
-      const Eigen::Vector3d p_W = pose_f.Point(f.Evaluate(x[0], x[1], 0).S);
-      const PointSurfaceExtremum q = SolvePointSurface(p_W, g, pose_g, x.tail<2>());
-      if (q.status != ExtremalStatus::kConverged || !(q.distance < best_distance)) break;
-      best << x.head<2>(), q.u;
-      best_distance = q.distance;
-    }
-    if (best == saddle.u) continue;
     SurfacePairEval q;
-    const SurfaceSurfaceExtremum e =
-        SolveSurfaceSurface(f, pose_f, g, pose_g, best, kContinuation, &q);
-    if (e.status != ExtremalStatus::kConverged || !(e.alignment < 0.0) ||
+    SurfaceSurfaceExtremum e;
+    if (!MinimumBesideSaddle(f, pose_f, g, pose_g, saddle, at, rc, side, &e, &q) ||
         !(e.beta < options.activation) || !(e.beta > -options.max_penetration) ||
         side * (e.p_g - saddle.p_g).dot(rc.min_direction) < kSamePoint) {
       continue;
     }
-    const RelativeCurvature k = RelativeCurvatureOf(q);
-    if (!k.valid || k.crossing) continue;
     AddFound({a, b, e.u, e.beta, e.p_f, e.p_g}, out);
   }
 }

@@ -6,6 +6,9 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
+#include "contact/box_newton.h"
+#include "contact/solver_inputs.h"
+
 namespace tangent::contact {
 
 bool ShapeOperator(const PlacedSurfacePoint& p, Eigen::Matrix3d* K_W) {
@@ -62,6 +65,33 @@ Eigen::Vector4d ParameterStepAlong(const SurfacePairEval& e, const Eigen::Vector
     step.segment<2>(2 * side) = (T.transpose() * T).inverse() * (T.transpose() * w);
   }
   return step;
+}
+
+bool MinimumBesideSaddle(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                         const nurbs::NurbsSurface& g, const BodyPose& pose_g,
+                         const SurfaceSurfaceExtremum& saddle, const SurfacePairEval& at,
+                         const RelativeCurvature& rc, double side, SurfaceSurfaceExtremum* out,
+                         SurfacePairEval* out_eval) {
+  const double radius = 1.0 / std::max(rc.eigenvalues.cwiseAbs().maxCoeff(), 1e-300);
+  const Eigen::Vector4d step = ParameterStepAlong(at, rc.min_direction);
+  if (!step.allFinite()) return false;
+  const internal::PairBox box = internal::PairBoxOf(f, g);
+  Eigen::Vector4d best = saddle.u;
+  double best_distance = saddle.beta;
+  for (double xi = 0.01 * radius; xi <= 2.0 * radius; xi *= 2.0) {
+    const Eigen::Vector4d x =
+        internal::ClampOrWrap<4>(saddle.u + side * xi * step, box.lo, box.hi, box.periodic);
+    const Eigen::Vector3d p_W = pose_f.Point(f.Evaluate(x[0], x[1], 0).S);
+    const PointSurfaceExtremum q = SolvePointSurface(p_W, g, pose_g, x.tail<2>());
+    if (q.status != ExtremalStatus::kConverged || !(q.distance < best_distance)) break;
+    best << x.head<2>(), q.u;
+    best_distance = q.distance;
+  }
+  if (best == saddle.u) return false;
+  *out = SolveSurfaceSurface(f, pose_f, g, pose_g, best, kContinuation, out_eval);
+  if (out->status != ExtremalStatus::kConverged || !(out->alignment < 0.0)) return false;
+  const RelativeCurvature k = RelativeCurvatureOf(*out_eval);
+  return k.valid && !k.crossing;
 }
 
 }  // namespace tangent::contact

@@ -51,4 +51,18 @@ RelativeCurvature RelativeCurvatureOf(const SurfacePairEval& e);
 /// minima on either side of a saddle. @pre neither point is a pole.
 Eigen::Vector4d ParameterStepAlong(const SurfacePairEval& e, const Eigen::Vector3d& w);
 
+/// The minimum beside a saddle on one side (`side` ±1 along rc.min_direction): Newton from a
+/// seed beside the saddle is drawn back to it (the nearest critical point), so f's point first
+/// walks along the crossing direction, in steps growing from 1 % of the curvature radius
+/// 1/max|λ| up to two radii, while its distance to g (a point–surface solve) keeps falling;
+/// Newton from the lowest point then lands in the minimum's basin. @return whether that Newton
+/// converged to a facing minimum (not itself crossing): *out and *out_eval. Allocation free.
+/// The global stage's split (MinimaBeside) and a split row's return to its own minimum
+/// (optimizer/split_rows.h) both take it.
+bool MinimumBesideSaddle(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
+                         const nurbs::NurbsSurface& g, const BodyPose& pose_g,
+                         const SurfaceSurfaceExtremum& saddle, const SurfacePairEval& at,
+                         const RelativeCurvature& rc, double side, SurfaceSurfaceExtremum* out,
+                         SurfacePairEval* out_eval);
+
 }  // namespace tangent::contact

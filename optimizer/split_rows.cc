@@ -39,45 +39,18 @@ double HeightAt(const nurbs::NurbsSurface& f, const BodyPose& pf, const nurbs::N
 
 }  // namespace
 
-// The minimum beside a saddle on the side of `toward` (the contact's parameters before it was
-// drawn onto the saddle; periodic directions taken the short way round), found as the global
-// stage's MinimaBeside finds both: f's point walked along the negative-curvature direction in
-// steps growing from 1 % of the curvature radius while its distance to g falls, then Newton from
-// the lowest point, which must converge to a minimum (not crossing), facing, and lower than the
-// saddle. Allocation free. @return whether one was found (*out, *out_eval).
+// contact::MinimumBesideSaddle on the side of `toward` (periodic directions the short way
+// round), lower than the saddle.
 bool MinimumToward(const nurbs::NurbsSurface& f, const BodyPose& pf, const nurbs::NurbsSurface& g,
                    const BodyPose& pg, const contact::SurfaceSurfaceExtremum& saddle,
                    const contact::SurfacePairEval& at, const contact::RelativeCurvature& rc,
                    const Eigen::Vector4d& toward, contact::SurfaceSurfaceExtremum* out,
                    contact::SurfacePairEval* out_eval) {
-  const double radius = 1.0 / std::max(rc.eigenvalues.cwiseAbs().maxCoeff(), 1e-300);
   const Eigen::Vector4d step = contact::ParameterStepAlong(at, rc.min_direction);
-  if (!step.allFinite()) return false;
-  const contact::internal::PairBox box = contact::internal::PairBoxOf(f, g);
-  const Eigen::Vector4d diff = ShortWay(box, saddle.u, toward);
+  const Eigen::Vector4d diff = ShortWay(contact::internal::PairBoxOf(f, g), saddle.u, toward);
   const double side = diff.dot(step) >= 0.0 ? 1.0 : -1.0;
-  Eigen::Vector4d best = saddle.u;
-  double best_distance = saddle.beta;
-  for (double xi = 0.01 * radius; xi <= 2.0 * radius; xi *= 2.0) {
-    const Eigen::Vector4d x = contact::internal::ClampOrWrap<4>(saddle.u + side * xi * step, box.lo,
-                                                                box.hi, box.periodic);
-    const Eigen::Vector3d p_W = pf.Point(f.Evaluate(x[0], x[1], 0).S);
-    const contact::PointSurfaceExtremum q = contact::SolvePointSurface(p_W, g, pg, x.tail<2>());
-    if (q.status != contact::ExtremalStatus::kConverged || !(q.distance < best_distance)) break;
-    best << x.head<2>(), q.u;
-    best_distance = q.distance;
-  }
-  if (best == saddle.u) return false;
-  const contact::SurfaceSurfaceExtremum e =
-      contact::SolveSurfaceSurface(f, pf, g, pg, best, contact::kContinuation, out_eval);
-  if (e.status != contact::ExtremalStatus::kConverged || !(e.alignment < 0.0) ||
-      !(e.beta < saddle.beta)) {
-    return false;
-  }
-  const contact::RelativeCurvature k = contact::RelativeCurvatureOf(*out_eval);
-  if (!k.valid || k.crossing) return false;
-  *out = e;
-  return true;
+  return contact::MinimumBesideSaddle(f, pf, g, pg, saddle, at, rc, side, out, out_eval) &&
+         out->beta < saddle.beta;
 }
 
 // A row of a split pair (one minimum either side of a saddle) whose evaluation converged to a
