@@ -6,7 +6,9 @@
 // violation above issue 33's 1e-6 m: the solve jammed, as with the step reach on from 140 s; or
 // a contact the global stage adds deeper than that: the rows missed it; or the wires' true gap,
 // from their centre lines (testing/tube_gap.h, every 50 ms of the drag), below −1e-6 m: the
-// wires crossed, whatever the rows read). Exit status 1 for either.
+// wires crossed, whatever the rows read; or the solve at its iteration budget in more than half
+// the ticks of a second: the chain no longer follows the hand, each tick's solve ending where it
+// started, whatever its violation). Exit status 1 for either.
 //
 //   ./build/bench/chain_soak [--seconds 150] [--from 0]   (print seconds from)
 //                            [--trace-from T --trace-to T]  (every device step's contacts)
@@ -95,6 +97,7 @@ int main(int argc, char** argv) {
   Snapshot snap;
   double f_sum = 0.0, worst_violation = 0.0;
   int events = 0, contacts_max = 0, quiet = 0;
+  int stalled = 0, ticks = 0;  // this second's ticks, and those whose solve used its whole budget
   bool apart = false;
   double jammed_at = -1.0, jam_violation = 0.0;
   // The wires' true gaps (testing/tube_gap.h), every `truth_every` device steps: a row held off
@@ -123,6 +126,8 @@ int main(int argc, char** argv) {
     for (int tick = 0; tick < 4; ++tick) {
       servo.Tick(&s, now, &r);
       now += timing.TickNs();
+      ++ticks;
+      stalled += r.iterations >= options.max_iterations;
       worst_violation = std::max(worst_violation, r.violation);
       if (jammed_at < 0.0 && r.violation > kHeldViolation) {
         jammed_at = t;
@@ -218,11 +223,21 @@ int main(int argc, char** argv) {
         for (int p = 0; p < servo.lines().pairs(); ++p) lines += servo.lines().line(p);
         std::printf(
             "%6.0f s  contacts %d (max %d)  lines %d (placed %lld, moved %lld)  mean |F| %.3f N  "
-            "events %d  violation %.1e\n",
+            "events %d  violation %.1e  stalled %d\n",
             t + dt, snap.num_contacts, contacts_max, lines,
             static_cast<long long>(servo.lines().placements()),
-            static_cast<long long>(servo.lines().moves()), f_sum / 1000.0, events, worst_violation);
+            static_cast<long long>(servo.lines().moves()), f_sum / 1000.0, events, worst_violation,
+            stalled);
       }
+      if (jammed_at < 0.0 && 2 * stalled > ticks) {
+        jammed_at = t;
+        jam_violation = worst_violation;
+        std::printf(
+            "chain_soak: the solve used its whole budget in %d of the %d ticks of the second to "
+            "%.0f s: the chain does not follow the hand (not held)\n",
+            stalled, ticks, t + dt);
+      }
+      stalled = ticks = 0;
       f_sum = 0.0;
       events = 0;
       contacts_max = 0;
