@@ -1,7 +1,8 @@
 // The soak's paperclip drag offline (docs/reliability.md, "Soak"): the servo, the simulated
 // device with its driver watchdog and the global stage stepped in one thread along the looped
 // "drag" trajectory, deterministic. Prints, per simulated second: contacts, mean |F| at the hand,
-// events; and when the chain comes apart (the force at the hand stays below 0.02 N for a whole
+// events, the worst violation and the ticks whose solve used its whole iteration budget; and
+// when the chain comes apart (the force at the hand stays below 0.02 N for a whole
 // circle while the drag pulls) or is held only by an unresolved penetration (a tick's constraint
 // violation above issue 33's 1e-6 m: the solve jammed, as with the step reach on from 140 s; or
 // a contact the global stage adds deeper than that: the rows missed it; or the wires' true gap,

@@ -1,11 +1,6 @@
 #include "contact/global_minima.h"
 
 #include <algorithm>
-#include <array>
-#include <cmath>
-
-#include "contact/box_newton.h"
-#include "contact/solver_inputs.h"
 
 namespace tangent::contact::internal {
 
