@@ -47,8 +47,14 @@ struct SolverOptions {
   /// ends farther than this from where it was at the solve's anchor (ClearanceGuard::Motion).
   /// Needs the clearance guard (set_clearance_guard). The bodies are marked once a solve, when
   /// it first steps (Solver::set_motion_marker); the servo marks those of contacts near a
-  /// pitchfork of their distance (ServoOptions::max_part_speed).
+  /// pitchfork of their distance (ServoOptions::max_part_speed). A step it cuts to nothing
+  /// updates no multiplier (docs/optimizer.md, "Steps at the motion bound").
   double max_solve_motion = 0.0;
+  /// A step the motion bound shortens keeps its normal part whole (Solver::SplitBoundedStep):
+  /// a solve standing at its bound still restores its constraints instead of stopping there
+  /// (docs/optimizer.md, "Steps at the motion bound"). Off by default: on the paperclip soak it
+  /// frees the solve the bound froze, and the chain is then lost (docs/reliability.md).
+  bool bounded_normal_step = false;
   /// Newton steps per iteration while the inequalities' active set changes (its guess from the
   /// multipliers, then its corrections from the linearized constraints after the step).
   int max_active_set_passes = 4;
@@ -109,6 +115,9 @@ struct SolveStats {
   /// the Newton steps the solve motion bound shortened (SolverOptions::max_solve_motion).
   bool motion_marked = false;
   int motion_bounded_steps = 0;
+  /// The motion bound or the clearance guard left no fraction of a Newton step: the solve
+  /// stopped, unconverged, where it stood (as it would after every later iteration).
+  bool stopped_at_bound = false;
   /// Second-order check (only with SolverOptions::second_order_check): the Lagrangian's Hessian
   /// restricted to the null space of the active constraints' Jacobian is positive definite
   /// (a strict local minimum, not a saddle), and its smallest eigenvalue.
@@ -229,6 +238,14 @@ class Solver {
   /// @return whether any row was estimated.
   bool LeastSquaresMultipliers(bool need_inequality);
   bool StepWithinTrustRegion() const;
+  /// A Newton step the solve motion bound shortens, split into its normal part, which cancels
+  /// the linearized constraints, −H⁻¹ μ (J_Eᵀc_E + J_Aᵀc_A) (step_normal_), and the rest
+  /// (step_, the motion along them): the normal part is taken whole and the bound shortens only
+  /// the rest, so a solve standing at its bound still restores feasibility rather than stopping
+  /// (docs/optimizer.md, "Steps at the motion bound"). Sets q_base_ = q + step_normal_ (normalized)
+  /// and the Jacobian products of both parts. false (nothing changed) when the normal part does not
+  /// itself fit within the bound and the clearance guard's share.
+  bool SplitBoundedStep(const Eigen::VectorXd& q);
   /// SolverOptions::finish_violation's correction of *q (ev_, grad_e_ and kkt_ at *q, st's
   /// residuals its own). Kept (q, ev_, grad_e_, kkt_ and st at the corrected point) only if it
   /// lowers the violation with finite residuals; otherwise all are as they came.
@@ -263,6 +280,8 @@ class Solver {
   Eigen::VectorXd q_start_, lambda_e_start_, lambda_i_start_, lambda_e_best_, lambda_i_best_;
   Eigen::VectorXd weights_, gn_e_, gn_i_, gn_o_, kkt_, grad_e_, linearized_e_, linearized_i_,
       jstep_e_, jstep_i_;
+  // A motion-bounded step's parts (SplitBoundedStep): the normal step and its Jacobian products.
+  Eigen::VectorXd step_normal_, q_base_, jnormal_e_, jnormal_i_;
   // Dense Newton matrices up to kSmallDense: DenseCholesky (the servo's). Larger ones (design
   // solves, 154 x 154 for the four-bar) keep Eigen's blocked LLT, whose matrix products pay
   // off there.

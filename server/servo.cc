@@ -212,6 +212,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   optimizer::SolverOptions so;
   so.max_iterations = options.max_iterations;
   so.step_reach = options.step_reach;
+  so.bounded_normal_step = options.bounded_normal_step;
   so.kkt_tolerance = options.kkt_tolerance;
   solver_ = std::make_unique<optimizer::Solver>(p, so);
   // The per-solve data the tick changes: contact slots (free ones deactivated, then the cold
@@ -579,6 +580,7 @@ bool ServoLoop::MoveScene(const DeviceSample* fresh_device, double dt, const Inj
   out->fault = fault;
   out->iterations = st.iterations;
   out->bounded = st.motion_marked;
+  out->stopped_at_bound = st.stopped_at_bound;
   out->kkt = st.kkt_residual;
   out->num_contacts = active_contacts();
   const TrackingCounts after = Tracking();

@@ -62,6 +62,8 @@ struct ServoOptions {
   bool face_contacts = true;
   /// optimizer::SolverOptions::step_reach (off by default, as line_contacts).
   bool step_reach = false;
+  /// optimizer::SolverOptions::bounded_normal_step (off by default).
+  bool bounded_normal_step = false;
   /// No tunnelling (docs/stability.md): every step is kept within the global stage's last
   /// clearance certificate (AdoptClearances), so no pair of parts certified apart can pass
   /// through each other before the stage looks again, however late that is.
@@ -101,6 +103,8 @@ struct TickResult {
   /// This tick's solve stepped with parts near a pitchfork of a contact's distance marked for
   /// the motion bound (ServoOptions::max_part_speed).
   bool bounded = false;
+  /// This tick's solve stopped at its motion bound, unconverged (SolveStats::stopped_at_bound).
+  bool stopped_at_bound = false;
 };
 
 class ServoLoop {

@@ -12,6 +12,8 @@
 
 #include <Eigen/Geometry>
 
+#include "nurbs/primitives.h"
+#include "optimizer/contacts.h"
 #include "optimizer/goals.h"
 #include "optimizer/solver.h"
 #include "testing/alloc_counter.h"
@@ -250,6 +252,73 @@ TEST(ClearanceGuardTest, TheSolverAsksForItsMarksOnceWhenItStepsAndKeepsToTheBou
   EXPECT_FALSE(st.motion_marked);
   EXPECT_EQ(st.motion_bounded_steps, 0);
   EXPECT_NEAR(q[m.offset(1)], 0.01 / (1 + 1e-3), 1e-9);
+}
+
+TEST(ClearanceGuardTest, ASolveAtItsMotionBoundStillRestoresItsContact) {
+  // A probe 1e-7 m into a floor, pulled along it (and onto it) by a goal 10 mm away, its solve
+  // motion bound 0.1 mm: the first Newton step leaves the bound most of the way. With
+  // SolverOptions::bounded_normal_step the step's normal part, which cancels the floor's
+  // linearized row, is taken whole and only the rest is shortened (Solver::SplitBoundedStep),
+  // so the solve ends on the floor at the bound. A shortened whole step takes 1 % of the
+  // correction and then stands at the bound, every later step cut to nothing: the paperclip
+  // soak's freeze (docs/reliability.md).
+  const nurbs::NurbsSurface floor = nurbs::MakePlanePatch(
+      Eigen::Vector3d(-0.05, -0.05, 0.0), Eigen::Vector3d(0.1, 0, 0), Eigen::Vector3d(0, 0.1, 0));
+  Mechanism m;
+  const int fixed = m.AddBody(Body{"floor", true});
+  Body probe_body{"probe"};
+  probe_body.pose << 0, 0, -1e-7, 1, 0, 0, 0;
+  const int probe = m.AddBody(probe_body);
+  ClearanceGuard guard;
+  guard.Configure(m, {}, {0.0, 0.0});
+  Problem p(m);
+  const Attachment tip{probe, {0, 0, 0}};
+  p.AddObjective(MakePositionGoal(tip, {0.01, 0, -0.001}), 1.0);
+  p.AddInequality(MakePointOnSurface(tip, fixed, &floor, {0.5, 0.5}));
+  SolverOptions options;
+  options.max_solve_motion = 1e-4;
+  options.bounded_normal_step = true;
+  Solver solver(p, options);
+  solver.set_clearance_guard(&guard);
+  solver.set_motion_marker(
+      [](void* g) {
+        static_cast<ClearanceGuard*>(g)->Bound(1, true);
+        return true;
+      },
+      &guard);
+  const Eigen::VectorXd start = m.InitialCoordinates();
+  Eigen::VectorXd q = start;
+  const long before = testing::AllocationCount();
+  const SolveStats st = solver.Solve(&q);
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
+  EXPECT_GT(st.motion_bounded_steps, 0);
+  EXPECT_FALSE(st.stopped_at_bound);
+  EXPECT_LE(guard.Motion(1, start, q, q, 0.0), 1e-4 * (1 + 1e-9));
+  EXPECT_GT(q[m.offset(1)], 0.9e-4);  // along the floor, as far as the bound lets it
+  EXPECT_LE(st.max_violation, options.constraint_tolerance);
+  EXPECT_NEAR(q[m.offset(1) + 2], 0.0, options.constraint_tolerance);
+  // The floor carries the goal's pull onto it (1 mm of the goal's unit weight), not more.
+  EXPECT_NEAR(solver.inequality_multipliers()[0], 1e-3, 1e-5);
+
+  // Without the split (the default) the solve stops at the bound, through the floor, and says
+  // so; its multiplier is what the first step left, not μ c more for every iteration after it
+  // (μ c = 0.1 an iteration here).
+  options.bounded_normal_step = false;
+  Solver plain(p, options);
+  plain.set_clearance_guard(&guard);
+  plain.set_motion_marker(
+      [](void* g) {
+        static_cast<ClearanceGuard*>(g)->Bound(1, true);
+        return true;
+      },
+      &guard);
+  q = start;
+  const SolveStats stopped = plain.Solve(&q);
+  EXPECT_TRUE(stopped.stopped_at_bound);
+  EXPECT_FALSE(stopped.converged);
+  EXPECT_LT(stopped.iterations, 5);
+  EXPECT_GT(stopped.max_violation, 5e-8);
+  EXPECT_LT(plain.inequality_multipliers()[0], 1e-2);
 }
 
 }  // namespace
