@@ -1,19 +1,22 @@
 // The soak's paperclip drag offline (docs/reliability.md, "Soak"): the servo, the simulated
 // device with its driver watchdog and the global stage stepped in one thread along the looped
 // "drag" trajectory, deterministic. Prints, per simulated second: contacts, mean |F| at the hand,
-// events, the worst violation and the ticks whose solve used its whole iteration budget; and
+// events, the worst violation and the ticks whose solve used its whole iteration budget or
+// stopped at its motion bound unconverged (stalled); and
 // when the chain comes apart (the force at the hand stays below 0.02 N for a whole
 // circle while the drag pulls) or is held only by an unresolved penetration (a tick's constraint
 // violation above issue 33's 1e-6 m: the solve jammed, as with the step reach on from 140 s; or
 // a contact the global stage adds deeper than that: the rows missed it; or the wires' true gap,
 // from their centre lines (testing/tube_gap.h, every 50 ms of the drag), below −1e-6 m: the
-// wires crossed, whatever the rows read; or the solve at its iteration budget in more than half
-// the ticks of a second: the chain no longer follows the hand, each tick's solve ending where it
-// started, whatever its violation). Exit status 1 for either.
+// wires crossed, whatever the rows read; or the solve stalled in more than half the ticks of a
+// second: the chain no longer follows the hand, each tick's solve ending where it started,
+// whatever its violation). Exit status 1 for either. At the end: the least true gap, and how
+// many of the true-gap checks found the wires crossed.
 //
 //   ./build/bench/chain_soak [--seconds 150] [--from 0]   (print seconds from)
 //                            [--trace-from T --trace-to T]  (every device step's contacts)
 //                            [--lines] [--reach]  (ServoOptions::line_contacts, step_reach)
+//                            [--normal-step]  (ServoOptions::bounded_normal_step)
 //                            [--iterations N]  (ServoOptions::max_iterations, default 10)
 //                            [--truth-every 50]  (ms between true-gap checks; 0: none)
 //                            [--pass-every 4]  (ms between global passes; tangentd's stage
@@ -63,6 +66,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
     if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
+    if (!std::strcmp(argv[i], "--normal-step")) options.bounded_normal_step = true;
     if (!std::strcmp(argv[i], "--truth-every") && i + 1 < argc)
       truth_every = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--jitter") && i + 1 < argc) jitter = std::atoi(argv[i + 1]);
@@ -98,7 +102,7 @@ int main(int argc, char** argv) {
   Snapshot snap;
   double f_sum = 0.0, worst_violation = 0.0;
   int events = 0, contacts_max = 0, quiet = 0;
-  int stalled = 0, ticks = 0;  // this second's ticks, and those whose solve used its whole budget
+  int stalled = 0, ticks = 0;  // this second's ticks, and those whose solve stalled
   bool apart = false;
   double jammed_at = -1.0, jam_violation = 0.0;
   // The wires' true gaps (testing/tube_gap.h), every `truth_every` device steps: a row held off
@@ -107,7 +111,8 @@ int main(int argc, char** argv) {
   for (const auto& surface : scene->surfaces) {
     centre.push_back(tangent::testing::SampleCentreline(surface.surface, 0, 4000));
   }
-  double truest = INFINITY, truest_at = 0.0;
+  double truest = INFINITY, truest_at = 0.0, crossed_last = -1.0;
+  int64_t checks = 0, crossed = 0;  // true-gap checks, and those below −kHeldViolation
   tangent::bench::TimingJitter timing(jitter);
   for (int64_t k = 0; k < static_cast<int64_t>(seconds / dt); ++k) {
     const double t = dt * static_cast<double>(k);
@@ -128,7 +133,8 @@ int main(int argc, char** argv) {
       servo.Tick(&s, now, &r);
       now += timing.TickNs();
       ++ticks;
-      stalled += r.iterations >= options.max_iterations;
+      // A solve at its budget, or stopped at its motion bound unconverged: it did not follow.
+      stalled += r.iterations >= options.max_iterations || r.stopped_at_bound;
       worst_violation = std::max(worst_violation, r.violation);
       if (jammed_at < 0.0 && r.violation > kHeldViolation) {
         jammed_at = t;
@@ -200,9 +206,18 @@ int main(int argc, char** argv) {
         placed(sb.body, &Rb, &pb);
         const auto& ca = centre[static_cast<size_t>(pair.surface_a)];
         const auto& cb = centre[static_cast<size_t>(pair.surface_b)];
+        int ia = -1, ib = -1;
         const double gap =
-            tangent::testing::CentrelineDistance(ca, Ra, pa, cb, Rb, pb) - ca.radius - cb.radius;
+            tangent::testing::CentrelineDistance(ca, Ra, pa, cb, Rb, pb, 16, &ia, &ib) - ca.radius -
+            cb.radius;
+        if (trace) {  // where along each wire (a fraction of its centre line) the gap is least
+          std::printf("  true gap %d-%d %.2e at %.4f %.4f\n", pair.surface_a, pair.surface_b, gap,
+                      static_cast<double>(ia) / static_cast<double>(ca.points.size() - 1),
+                      static_cast<double>(ib) / static_cast<double>(cb.points.size() - 1));
+        }
         if (gap < truest) truest = gap, truest_at = t;
+        ++checks;
+        if (gap < -kHeldViolation) ++crossed, crossed_last = t;
         if (jammed_at < 0.0 && gap < -kHeldViolation) {
           jammed_at = t;
           jam_violation = -gap;
@@ -234,8 +249,9 @@ int main(int argc, char** argv) {
         jammed_at = t;
         jam_violation = worst_violation;
         std::printf(
-            "chain_soak: the solve used its whole budget in %d of the %d ticks of the second to "
-            "%.0f s: the chain does not follow the hand (not held)\n",
+            "chain_soak: the solve stalled (its whole budget, or stopped at its motion bound) in "
+            "%d of the %d ticks of the second to %.0f s: the chain does not follow the hand (not "
+            "held)\n",
             stalled, ticks, t + dt);
       }
       stalled = ticks = 0;
@@ -256,6 +272,10 @@ int main(int argc, char** argv) {
   if (truth_every > 0) {
     std::printf("chain_soak: least true gap %.1e m (at %.3f s), checked every %d ms\n", truest,
                 truest_at, truth_every);
+    std::printf("chain_soak: the wires crossed by more than %.0e m in %lld of %lld pair checks",
+                kHeldViolation, static_cast<long long>(crossed), static_cast<long long>(checks));
+    if (crossed > 0) std::printf(", the last at %.3f s", crossed_last);
+    std::printf("\n");
   }
   return apart || jammed_at >= 0.0 ? 1 : 0;
 }

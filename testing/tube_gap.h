@@ -70,11 +70,12 @@ inline double SegmentDistance(const Eigen::Vector3d& p0, const Eigen::Vector3d& 
 
 /// The least distance between two centre lines placed in the world by (R, p) each: segment
 /// pairs of a coarse polyline (every `stride`-th point) within 2 mm of the least, then the fine
-/// segments inside them.
+/// segments inside them. *at_a, *at_b (when given): the first points of the closest fine
+/// segments, indices into a.points and b.points.
 inline double CentrelineDistance(const Centreline& a, const Eigen::Matrix3d& Ra,
                                  const Eigen::Vector3d& pa, const Centreline& b,
                                  const Eigen::Matrix3d& Rb, const Eigen::Vector3d& pb,
-                                 int stride = 16) {
+                                 int stride = 16, int* at_a = nullptr, int* at_b = nullptr) {
   std::vector<Eigen::Vector3d> wa(a.points.size()), wb(b.points.size());
   for (size_t i = 0; i < wa.size(); ++i) wa[i] = Ra * a.points[i] + pa;
   for (size_t j = 0; j < wb.size(); ++j) wb[j] = Rb * b.points[j] + pb;
@@ -99,7 +100,12 @@ inline double CentrelineDistance(const Centreline& a, const Eigen::Matrix3d& Ra,
     if (c.d > least + 2e-3) continue;
     for (int i = c.i; i < std::min(c.i + stride, na - 1); ++i) {
       for (int j = c.j; j < std::min(c.j + stride, nb - 1); ++j) {
-        best = std::min(best, SegmentDistance(wa[i], wa[i + 1], wb[j], wb[j + 1]));
+        const double d = SegmentDistance(wa[i], wa[i + 1], wb[j], wb[j + 1]);
+        if (d < best) {
+          best = d;
+          if (at_a) *at_a = i;
+          if (at_b) *at_b = j;
+        }
       }
     }
   }
