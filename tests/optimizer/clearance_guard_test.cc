@@ -278,14 +278,17 @@ TEST(ClearanceGuardTest, ASolveAtItsMotionBoundStillRestoresItsContact) {
   SolverOptions options;
   options.max_solve_motion = 1e-4;
   options.bounded_normal_step = true;
+  auto guarded = [&](Solver* s) {  // the probe marked for the bound at each solve's first step
+    s->set_clearance_guard(&guard);
+    s->set_motion_marker(
+        [](void* g) {
+          static_cast<ClearanceGuard*>(g)->Bound(1, true);
+          return true;
+        },
+        &guard);
+  };
   Solver solver(p, options);
-  solver.set_clearance_guard(&guard);
-  solver.set_motion_marker(
-      [](void* g) {
-        static_cast<ClearanceGuard*>(g)->Bound(1, true);
-        return true;
-      },
-      &guard);
+  guarded(&solver);
   const Eigen::VectorXd start = m.InitialCoordinates();
   Eigen::VectorXd q = start;
   const long before = testing::AllocationCount();
@@ -305,13 +308,7 @@ TEST(ClearanceGuardTest, ASolveAtItsMotionBoundStillRestoresItsContact) {
   // (μ c = 0.1 an iteration here).
   options.bounded_normal_step = false;
   Solver plain(p, options);
-  plain.set_clearance_guard(&guard);
-  plain.set_motion_marker(
-      [](void* g) {
-        static_cast<ClearanceGuard*>(g)->Bound(1, true);
-        return true;
-      },
-      &guard);
+  guarded(&plain);
   q = start;
   const SolveStats stopped = plain.Solve(&q);
   EXPECT_TRUE(stopped.stopped_at_bound);
