@@ -793,6 +793,14 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
     if (split) {
       ev_.JacobianTimes(ProblemEvaluator::kEquality, step_, &jstep_e_);
       ev_.JacobianTimes(ProblemEvaluator::kInequality, step_, &jstep_i_);
+    } else if (alpha == 0.0) {
+      // No fraction of the step (the motion bound or the clearance guard): no trial to evaluate
+      // (ev_ is at q) and no multiplier update, which at the same point would be λ − μc every
+      // iteration: the multipliers ran away (+0.06 N an iteration on the paperclip soak's
+      // 6e-8 m, the KKT residual with them, from 2.5e-3 to 0.59 over a tick). Nothing changes,
+      // so every later iteration would be this one: the solve stops where it stands.
+      st.stopped_at_bound = true;
+      break;
     }
     // Trials start from q's contact states: a rejected trial's (a contact re-solved onto another
     // branch of its pair, far along a step the line search then halves) must not be where the
@@ -811,20 +819,12 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
           !design || slope >= 0.0 ||
           Lagrangian(q_try_) <= lagrangian + 1e-4 * alpha * slope + 1e-12 * std::abs(lagrangian);
       // (The last trial is taken whatever it leaves, with the fraction it was taken at.)
+      // (A split step's normal part alone, α = 0, is its last trial.)
       if ((Violation() <= allowed && sufficient) || k + 1 == trials || alpha == 0.0) break;
       alpha *= 0.5;
     }
     last_step_ = alpha * std::sqrt(step2);
-    // Multipliers from the linearized constraints at the step taken. None when no step was
-    // taken (the motion bound or the clearance guard cut it to nothing): the update at the same
-    // point would be λ − μc, every iteration, and the multipliers ran away (+0.06 N an
-    // iteration on the paperclip soak's 6e-8 m, the KKT residual with them, from 2.5e-3 to
-    // 0.59 over a tick). Nothing then changes, so every later iteration would be this one: the
-    // solve stops where it stands.
-    if (alpha == 0.0 && !split) {
-      st.stopped_at_bound = true;
-      break;
-    }
+    // Multipliers from the linearized constraints at the step taken.
     if (split) {
       linearized_e_ += jnormal_e_;
       linearized_i_ += jnormal_i_;
