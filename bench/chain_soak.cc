@@ -17,6 +17,7 @@
 //                            [--trace-from T --trace-to T]  (every device step's contacts)
 //                            [--lines] [--reach]  (ServoOptions::line_contacts, step_reach)
 //                            [--normal-step]  (ServoOptions::bounded_normal_step)
+//                            [--floor F]  (ServoOptions::indefinite_floor)
 //                            [--iterations N]  (ServoOptions::max_iterations, default 10)
 //                            [--truth-every 50]  (ms between true-gap checks; 0: none)
 //                            [--pass-every 4]  (ms between global passes; tangentd's stage
@@ -67,6 +68,8 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
     if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
     if (!std::strcmp(argv[i], "--normal-step")) options.bounded_normal_step = true;
+    if (!std::strcmp(argv[i], "--floor") && i + 1 < argc)
+      options.indefinite_floor = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--truth-every") && i + 1 < argc)
       truth_every = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--jitter") && i + 1 < argc) jitter = std::atoi(argv[i + 1]);

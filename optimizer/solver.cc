@@ -491,7 +491,7 @@ double Solver::NewtonStep() {
     if (factor_ok_) {
       SolveStep();
       if (StepWithinTrustRegion()) break;
-    } else if (attempt == 0 && IndefiniteStep()) {
+    } else if (attempt == 0 && IndefiniteStep(objective_scale)) {
       factor_ok_ = true;
       if (StepWithinTrustRegion()) {
         ++indefinite_steps_;
@@ -506,7 +506,7 @@ double Solver::NewtonStep() {
   return lm;
 }
 
-bool Solver::IndefiniteStep() {
+bool Solver::IndefiniteStep(double objective_scale) {
   // Servo-sized dense matrices outside design mode (whose line search wants descent).
   if (H_.is_sparse() || n_ > kSmallDense || options_.design.enabled) return false;
   kkt_full_ = H_.dense().selfadjointView<Eigen::Upper>();
@@ -516,8 +516,12 @@ bool Solver::IndefiniteStep() {
   // Eigenvalues within 1e-12 of the largest (in magnitude) are the matrix's rounding: along
   // their eigenvectors the step is damped to that floor rather than amplifying it. (A pivoted
   // LDLᵀ solve differs from this one by 1-3 % at the paperclips' condition numbers of 1e14; the
-  // hooks hold with floors from 1e-16 to 1e-9 alike: docs/optimizer.md.)
-  const double floor = 1e-12 * ev.cwiseAbs().maxCoeff();
+  // hooks hold with floors from 1e-16 to 1e-9 alike: docs/optimizer.md.) Optionally also those
+  // below indefinite_floor of the objective's scale: a nearly free motion, where a residual of
+  // 3.6e-8 along an eigenvalue of −3.6e-7 made a 7e-3 step from a converged tick on the
+  // paperclip soak's line contacts and flung the clips apart (docs/reliability.md, "Soak").
+  const double floor =
+      std::max(1e-12 * ev.cwiseAbs().maxCoeff(), options_.indefinite_floor * objective_scale);
   if (!(floor > 0.0)) return false;
   for (int i = 0; i < n_; ++i) {
     kkt_inverse_[i] = 1.0 / (std::abs(ev[i]) < floor ? floor : ev[i]);

@@ -28,6 +28,13 @@ struct SolverOptions {
   /// Levenberg–Marquardt damping added to the Newton matrix, relative to the largest diagonal
   /// entry of its objective part (least astonishment and objective terms).
   double damping = 1e-12;
+  /// An indefinite Newton matrix's own step (Solver::IndefiniteStep) along an eigenvector whose
+  /// eigenvalue is smaller in magnitude than this times the objective's scale (the largest
+  /// diagonal entry of the objective part, as for `damping`) is damped to that floor: a motion
+  /// that a loaded contact's curvature leaves nearly free, where least astonishment no longer
+  /// holds the step to the tick (docs/optimizer.md, "Indefinite Newton matrices"). 0: damped only
+  /// to the matrix's rounding (1e-12 of its largest eigenvalue).
+  double indefinite_floor = 0.0;
   /// Linear algebra of the Newton step: dense LLᵀ for small systems, sparse LDLᵀ (Eigen's
   /// SimplicialLDLT, symbolic analysis done once per constraint structure) for large ones;
   /// kAuto picks sparse above `sparse_threshold` coordinates.
@@ -215,7 +222,7 @@ class Solver {
   /// eigendecomposition: exact along every eigenvector whose eigenvalue is above 1e-12 of the
   /// largest in magnitude, negative ones included; damped to that floor along the others (the
   /// directions the matrix does not determine at double precision). true with step_ set.
-  bool IndefiniteStep();
+  bool IndefiniteStep(double objective_scale);
   void SolveStep();
   void SecondOrderCheck(const Eigen::VectorXd& q, SolveStats* st);
   /// An orthonormal basis (n x k, k ≥ 0) of the motions the active constraints leave free at the

@@ -213,6 +213,7 @@ ServoLoop::ServoLoop(const Scene& scene_in, const ServoOptions& options)
   so.max_iterations = options.max_iterations;
   so.step_reach = options.step_reach;
   so.bounded_normal_step = options.bounded_normal_step;
+  so.indefinite_floor = options.indefinite_floor;
   so.kkt_tolerance = options.kkt_tolerance;
   solver_ = std::make_unique<optimizer::Solver>(p, so);
   // The per-solve data the tick changes: contact slots (free ones deactivated, then the cold

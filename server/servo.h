@@ -64,6 +64,8 @@ struct ServoOptions {
   bool step_reach = false;
   /// optimizer::SolverOptions::bounded_normal_step (off by default).
   bool bounded_normal_step = false;
+  /// optimizer::SolverOptions::indefinite_floor (0 by default: see there).
+  double indefinite_floor = 0.0;
   /// No tunnelling (docs/stability.md): every step is kept within the global stage's last
   /// clearance certificate (AdoptClearances), so no pair of parts certified apart can pass
   /// through each other before the stage looks again, however late that is.

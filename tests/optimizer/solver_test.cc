@@ -627,6 +627,48 @@ TEST(SolverTest, AnIndefiniteNewtonMatrixGetsItsExactStep) {
   EXPECT_NEAR((q.head<3>() - Eigen::Vector3d(2.0, 2.0, 0.0) * radius).norm(), 0.0, 1e-9);
 }
 
+// SolverOptions::indefinite_floor: an indefinite matrix's step along an eigenvector whose
+// eigenvalue is smaller in magnitude than the floor (times the objective's scale, 1 here) is
+// damped to it. The probe of the test above, pressed onto the ball by a pull from behind it,
+// stands at a saddle along the ball (the Lagrangian's curvature there −2): the exact step, or
+// one under a floor of 1, converges onto it in 3 steps; a floor of 10 damps that step to a
+// fifth and turns it downhill, and the solve no longer finds the saddle.
+TEST(SolverTest, AnIndefiniteStepIsDampedToItsFloorOnlyBelowIt) {
+  constexpr double radius = 0.01;
+  const nurbs::NurbsSurface ball = nurbs::MakeSphere(Eigen::Vector3d::Zero(), radius);
+  auto solve = [&](double floor, Eigen::VectorXd* q) {
+    Mechanism m;
+    const int fixed = m.AddBody(Body{"ball", true});
+    Body probe_body{"probe"};
+    probe_body.pose << radius, 0.02 * radius, 0, 1, 0, 0, 0;
+    const int probe = m.AddBody(probe_body);
+    Problem p(m);
+    const Attachment tip{probe, {0, 0, 0}};
+    p.AddObjective(MakePositionGoal(tip, {-2.0 * radius, 0, 0}), 1.0);
+    p.AddInequality(MakePointOnSurface(tip, fixed, &ball, {0.0, 0.5}));
+    p.set_least_astonishment(0.0);
+    SolverOptions o;
+    o.max_iterations = 8;
+    o.indefinite_floor = floor;
+    Solver s(p, o);
+    *q = m.InitialCoordinates();
+    return s.Solve(q);
+  };
+  Eigen::VectorXd exact, below, above;
+  const SolveStats st_exact = solve(0.0, &exact);
+  const SolveStats st_below = solve(1.0, &below);
+  const SolveStats st_above = solve(10.0, &above);
+  ASSERT_TRUE(st_exact.converged);
+  EXPECT_GT(st_exact.indefinite_steps, 0);
+  ASSERT_TRUE(st_below.converged);
+  EXPECT_EQ(st_below.iterations, st_exact.iterations);
+  EXPECT_LT((below - exact).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_NEAR(exact[1], 0.0, 1e-8);
+  EXPECT_FALSE(st_above.converged);
+  EXPECT_GT(st_above.indefinite_steps, 0);
+  EXPECT_GT(std::abs(above[1]), 0.02 * radius) << "not on the axis";
+}
+
 // Issue 13: a non-finite input gets a defined status and never poisons the next solve. Before,
 // the residuals' maxCoeff skipped a NaN (a NaN configuration returned "converged" after 0
 // iterations), and one NaN goal turned the multipliers into NaN for every later solve.
