@@ -47,7 +47,7 @@ void SectionContactTerm::Evaluate(const std::vector<BodyPose>& poses, TermState*
     return;
   }
   Update(poses, st);
-  r[0] = st->ext.beta;
+  r[0] = st->ext.beta - st->margin;
   internal::CurveRowJacobian(st->eval, st->direction, PoseOf(poses, body_f_),
                              PoseOf(poses, body_g_), J_a, J_b);
 }

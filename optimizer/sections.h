@@ -42,6 +42,9 @@ class SectionContactTerm final : public Term {
     contact::CurveSurfaceExtremum ext;
     contact::CurveSurfaceEval eval;
     Eigen::Vector3d direction = Eigen::Vector3d::Zero();  ///< what β is measured along
+    /// What β must reach (m): the row is β − margin ≥ 0. A line's sections hold their pair's
+    /// estimate of how far the gap dips between them (server/line_contacts.h); 0 otherwise.
+    double margin = 0.0;
     int64_t solves = 0;
     /// Puts the section on f's line (fixed, value), its extremum followed from (s, t, τ) = seed.
     void Place(int fixed_in, double value_in, const Eigen::Vector3d& seed) {

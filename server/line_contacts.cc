@@ -23,6 +23,17 @@ constexpr double kMoveGap = 1e-7;
 
 }  // namespace
 
+bool SectionDip(double below, double middle, double above, double* at) {
+  if (!std::isfinite(below) || !std::isfinite(middle) || !std::isfinite(above)) return false;
+  // The parabola through (−1, below), (0, middle), (1, above): curvature `curve`, slope `slope`
+  // at 0, its lowest point at x = −slope / curve, with the value middle − slope² / (2 curve).
+  const double curve = below + above - 2.0 * middle, slope = 0.5 * (above - below);
+  if (!(curve > 0.0) || !(std::abs(slope) < curve)) return false;
+  if (!(middle - slope * slope / (2.0 * curve) < std::min({below, middle, above}))) return false;
+  *at = -slope / curve;
+  return true;
+}
+
 int LineContacts::AddPair(optimizer::Problem* p, int body_f, const nurbs::NurbsSurface* f,
                           int body_g, const nurbs::NurbsSurface* g) {
   Pair pair;
@@ -30,6 +41,8 @@ int LineContacts::AddPair(optimizer::Problem* p, int body_f, const nurbs::NurbsS
     pair.term[i] = optimizer::MakeSectionContact(body_f, f, body_g, g);
     pair.row[i] = p->inequalities()[static_cast<size_t>(p->AddInequality(pair.term[i]))].row;
   }
+  pair.probe_data = pair.term[0]->MakeState();
+  pair.probe = static_cast<optimizer::SectionContactTerm::State*>(pair.probe_data.get());
   pairs_.push_back(std::move(pair));
   return static_cast<int>(pairs_.size()) - 1;
 }
@@ -78,6 +91,7 @@ bool LineContacts::Enter(int k, const contact::SurfaceSurfaceExtremum& ext,
   p.step = per_metre / per_metre[p.fixed];
   if (!Fit(&p, ext.u)) return false;
   Place(&p, ext.u);
+  for (auto* st : p.state) st->margin = 0.0;
   p.entering = true;
   return true;
 }
@@ -104,7 +118,6 @@ bool LineContacts::Fit(Pair* p, const Eigen::Vector4d& middle) const {
 }
 
 void LineContacts::Place(Pair* p, const Eigen::Vector4d& middle) {
-  static constexpr double kOffset[kSections] = {0.0, -1.0, 1.0};
   for (int i = 0; i < kSections; ++i) {
     const Eigen::Vector4d at = contact::IntoPairDomain(p->term[0]->f(), p->term[0]->g(),
                                                        middle + kOffset[i] * p->spacing * p->step);
@@ -147,7 +160,11 @@ LineContacts::Next LineContacts::Follow(int k, const std::vector<contact::BodyPo
     const optimizer::SectionContactTerm::State& s = *p.state[i];
     beta[i] = s.valid ? s.ext.beta : INFINITY;
   }
-  if (std::min({beta[0], beta[1], beta[2]}) > p.h) {
+  int nearest = 0;
+  for (int i = 1; i < kSections; ++i) {
+    if (beta[i] < beta[nearest]) nearest = i;
+  }
+  if (beta[nearest] > p.h) {
     Leave(k, u);
     return Next::kRelease;
   }
@@ -160,24 +177,53 @@ LineContacts::Next LineContacts::Follow(int k, const std::vector<contact::BodyPo
                         poses[static_cast<size_t>(t.body_b())], middle, &hint_f, &hint_g, &e);
   const contact::RelativeCurvature rc = contact::RelativeCurvatureOf(e);
   if (rc.valid && rc.eigenvalues[1] > 0.0 &&
-      rc.eigenvalues[0] > options_.leave * rc.eigenvalues[1] && beta[0] <= beta[1] &&
-      beta[0] <= beta[2]) {
+      rc.eigenvalues[0] > options_.leave * rc.eigenvalues[1] && nearest == 0) {
     Leave(k, u);
     return Next::kLeave;
   }
+  // What the sections hold for the next solve: the gap where it dips between them (Margin).
+  const double margin = Margin(&p, poses, beta);
+  for (int i = 0; i < kSections; ++i) p.state[i]->margin = margin;
   // Follow the line: toward the nearer side by half the spacing when it is nearer than the
   // middle (a line whose minimum has slid along). (Measured against a parabola through the
   // three moved to its lowest point: chain_soak --lines apart at 221 s instead of 566 s; and
-  // against no moves: 205 s.)
-  const int side = beta[1] < beta[2] ? 1 : 2;
-  if (beta[side] < beta[0] - kMoveGap) {
-    const Eigen::Vector4d to = middle + (side == 1 ? -0.5 : 0.5) * p.spacing * p.step;
+  // against no moves: 205 s.) A move keeps the margin, measured where the gap dips.
+  if (nearest != 0 && beta[nearest] < beta[0] - kMoveGap) {
+    const Eigen::Vector4d to = middle + (kOffset[nearest] < 0.0 ? -0.5 : 0.5) * p.spacing * p.step;
     if (Fit(&p, to)) {  // (the spacing refitted to the room there)
       Place(&p, to);
       ++moves_;
     }
   }
   return Next::kStay;
+}
+
+double LineContacts::Margin(Pair* p, const std::vector<contact::BodyPose>& poses,
+                            const double* beta) const {
+  // Three sections straddling a minimum of the gap along the line read it high by up to
+  // ½ λ_min (h/2)² between them: on the paperclip soak's hooks, wires 1.9e-6 m through each other
+  // while every section read 0 (docs/reliability.md, "Soak"). The section through the parabola's
+  // lowest point measures how deep the gap goes there, and the three then hold the pair that
+  // far apart. Measured, not extrapolated: on a straight line of minima (a rod in a groove) the
+  // parabola through rounding differences, or through a section past the rod's end, has a
+  // lowest point the gap does not reach, and the probe there reads what the sections do.
+  double at = 0.0;
+  if (!SectionDip(beta[1], beta[0], beta[2], &at)) return 0.0;
+  const optimizer::SectionContactTerm::State& middle = *p->state[0];
+  // Followed from the nearer section's extremum (not a blend: g's parameters and the line's may
+  // straddle a periodic seam, as on a wire's tube).
+  const optimizer::SectionContactTerm::State& nearer =
+      std::abs(at) < 0.5 ? middle : *p->state[at < 0.0 ? 1 : 2];
+  Eigen::Vector4d u;
+  u[p->fixed] = middle.value + at * p->spacing;
+  u[1 - p->fixed] = middle.u[2];
+  u.tail<2>() = middle.u.head<2>();
+  const Eigen::Vector4d in = contact::IntoPairDomain(p->term[0]->f(), p->term[0]->g(), u);
+  p->probe->Place(p->fixed, in[p->fixed], nearer.u);
+  p->term[0]->Update(poses, p->probe);
+  const contact::CurveSurfaceExtremum& e = p->probe->ext;
+  if (e.status != contact::ExtremalStatus::kConverged || !std::isfinite(e.beta)) return 0.0;
+  return std::max(0.0, std::min({beta[0], beta[1], beta[2]}) - e.beta);
 }
 
 }  // namespace tangent::server

@@ -13,6 +13,7 @@
 // toward a side that is nearer), and the point contact comes back, at the middle section, when
 // the relative curvature there passes `leave`. Allocation free after construction.
 
+#include <memory>
 #include <vector>
 
 #include "contact/extremal.h"
@@ -30,9 +31,19 @@ struct LineContactOptions {
   double leave = 0.25;
 };
 
+/// Where a line's gap may dip below its sections: the lowest point of the parabola through three
+/// equally spaced sections' distances `below`, `middle` and `above` (at −1, 0 and 1 spacings),
+/// in spacings from the middle, when it lies strictly between the outer two and below the least
+/// of the three; else false. Along the line the gap is d(δ) = β + ½ λ_min δ² + O(δ³) about its
+/// minimum (docs/contact.md, "Line contacts"), so where the sections straddle a minimum the
+/// parabola finds it to second order in the spacing.
+bool SectionDip(double below, double middle, double above, double* at);
+
 class LineContacts {
  public:
   static constexpr int kSections = 3;  ///< middle, then one either side
+  /// Section i's place along the line, in spacings from the middle.
+  static constexpr double kOffset[kSections] = {0.0, -1.0, 1.0};
 
   explicit LineContacts(const LineContactOptions& options = {}) : options_(options) {}
 
@@ -86,12 +97,20 @@ class LineContacts {
     double h_free = 0.0;    ///< h before fitting within the surfaces' domains (Fit)
     Eigen::Vector4d per_metre = Eigen::Vector4d::Zero();  ///< parameters per metre along the line
     Eigen::Vector4d step = Eigen::Vector4d::Zero();       ///< parameters per unit of the held one
+    /// A section measured, not held, where the gap dips between the three (SectionDip): how far
+    /// below them the gap reaches is the margin they hold (SectionContactTerm::State::margin).
+    std::unique_ptr<optimizer::TermState> probe_data;
+    optimizer::SectionContactTerm::State* probe = nullptr;
   };
   void Place(Pair* p, const Eigen::Vector4d& middle);
   /// Sets p's spacing for sections centred at `middle`: h_free, within both surfaces' domains.
   /// false when there is no room either side.
   bool Fit(Pair* p, const Eigen::Vector4d& middle) const;
   double Wrap(const Pair& p, double d) const;
+  /// The margin pair p's sections hold after a good tick at `poses` (beta: their distances): how
+  /// far the gap reaches below the least of them where it dips between them (0 where it does
+  /// not, or the probe there fails).
+  double Margin(Pair* p, const std::vector<contact::BodyPose>& poses, const double* beta) const;
 
   LineContactOptions options_;
   std::vector<Pair> pairs_;

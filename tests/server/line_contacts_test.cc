@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "contact/relative_curvature.h"
 #include "nurbs/primitives.h"
@@ -41,10 +42,11 @@ struct Cylinders {
     problem->mechanism().Poses(problem->mechanism().InitialCoordinates(), &poses);
     Turn(0.01, kGap);
   }
-  // b beside a along x at `gap`, its axis turned by `angle` about x (0: parallel, π/2: crossing).
-  void Turn(double angle, double gap) {
+  // b beside a along x at `gap`, its axis turned by `angle` about x (0: parallel, π/2: crossing),
+  // and moved by `along` along a's axis (the skew axes' nearest points move with it).
+  void Turn(double angle, double gap, double along = 0.0) {
     const Eigen::Quaterniond turn(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX()));
-    const Eigen::Vector3d mid(2 * kRadius + gap, 0, kLength / 2);
+    const Eigen::Vector3d mid(2 * kRadius + gap, 0, kLength / 2 + along);
     contact::Vector7d qb;
     qb << mid - turn * Eigen::Vector3d(0, 0, kLength / 2), turn.w(), turn.x(), turn.y(), turn.z();
     poses[1] = contact::BodyPose::FromCoordinates(qb);
@@ -155,6 +157,69 @@ TEST(LineContactsTest, ReleasedWhenThePartsPart) {
   c.Measure();
   EXPECT_EQ(c.lines.Follow(0, c.poses, &u), LineContacts::Next::kRelease);
   EXPECT_FALSE(c.lines.line(0));
+}
+
+TEST(LineContactsTest, SectionDipIsTheParabolasLowestPointBetweenTheSections) {
+  // Sections at −1, 0, 1 on d(x) = a (x − x₀)² + b: the dip is at x₀ whenever x₀ lies strictly
+  // between the outer two and off the sections.
+  for (double x0 : {-0.9, -0.45, -0.1, 0.3, 0.7}) {
+    auto d = [&](double x) { return 2e-6 * (x - x0) * (x - x0) + 1e-4; };
+    double at = 0.0;
+    ASSERT_TRUE(SectionDip(d(-1), d(0), d(1), &at)) << x0;
+    EXPECT_NEAR(at, x0, 1e-9) << x0;
+  }
+  double at = 0.0;
+  auto at_x0 = [&](double x0, double a) {
+    auto d = [&](double x) { return a * (x - x0) * (x - x0); };
+    return SectionDip(d(-1), d(0), d(1), &at);
+  };
+  EXPECT_FALSE(at_x0(0.0, 1.0)) << "the lowest point on a section: no dip";
+  EXPECT_FALSE(at_x0(1.5, 1.0)) << "beside the sections";
+  EXPECT_FALSE(at_x0(-1.0, 1.0)) << "on an outer section";
+  EXPECT_FALSE(at_x0(0.3, -1.0)) << "concave";
+  EXPECT_FALSE(SectionDip(1e-4, 1e-4, 1e-4, &at)) << "a straight line of minima";
+  EXPECT_FALSE(SectionDip(INFINITY, 1e-4, 2e-4, &at)) << "a section that did not solve";
+  EXPECT_FALSE(SectionDip(NAN, 1e-4, 2e-4, &at));
+}
+
+TEST(LineContactsTest, TheSectionsHoldTheGapWhereItDipsBetweenThem) {
+  // Two cylinders 0.3 rad from parallel: the gap along the line is least where the skew axes
+  // are nearest. Moved along the axis so that this lies between two sections, the sections read
+  // more than the gap; the margin they then hold is how much more, measured at the dip.
+  Cylinders c;
+  c.Turn(0.3, kGap);
+  contact::SurfacePairEval e;
+  const contact::SurfaceSurfaceExtremum x = c.Pair(&e);
+  ASSERT_EQ(x.status, contact::ExtremalStatus::kConverged);
+  ASSERT_TRUE(c.lines.Enter(0, x, e));
+  c.Measure();
+  const double spacing = (c.lines.section(0, 2).ext.p_f - c.lines.section(0, 0).ext.p_f).norm();
+  ASSERT_GT(spacing, 1e-3);
+  Eigen::Vector4d u;
+  for (double along : {0.3, 0.55, -0.4}) {
+    c.Turn(0.3, kGap, along * spacing);
+    c.Measure();
+    double least = INFINITY;
+    for (int i = 0; i < LineContacts::kSections; ++i) {
+      least = std::min(least, c.lines.section(0, i).ext.beta);
+    }
+    ASSERT_GT(least - kGap, 1e-7) << along << ": the sections straddle the dip";
+    const long before = testing::AllocationCount();
+    ASSERT_EQ(c.lines.Follow(0, c.poses, &u), LineContacts::Next::kStay);
+    EXPECT_EQ(testing::AllocationCount() - before, 0);
+    std::printf("moved %.2f spacings: sections %.3e m above the gap, margin %.3e m\n", along,
+                least - kGap, c.lines.section(0, 0).margin);
+    for (int i = 0; i < LineContacts::kSections; ++i) {
+      // (The skew axes' gap is a hyperbola along the line, not a parabola: the probe at the
+      // parabola's lowest point is off the true one by a little, and reads second order high.)
+      EXPECT_NEAR(c.lines.section(0, i).margin, least - kGap, 2e-3 * (least - kGap)) << along;
+    }
+  }
+  // Parallel again (a straight line of minima): no dip, no margin.
+  c.Turn(0.0, kGap);
+  c.Measure();
+  ASSERT_EQ(c.lines.Follow(0, c.poses, &u), LineContacts::Next::kStay);
+  EXPECT_EQ(c.lines.section(0, 0).margin, 0.0);
 }
 
 TEST(LineContactsTest, FollowingAllocatesNothing) {
