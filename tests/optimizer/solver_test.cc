@@ -586,20 +586,33 @@ TEST(SolverTest, ALoadedContactOnACurvedSurfaceStaysActiveWhileDragged) {
 // conditions: from a start a little off the axis it converges to that point in a few exact
 // (indefinite) steps, allocating nothing. Damping the matrix until it was positive definite
 // instead shortened the steps until the iteration cap.
+// A probe on a fixed ball, 1.1° off the axis, pulled toward a point two radii behind the ball.
+struct ProbeOnABall {
+  static constexpr double radius = 0.01;
+  nurbs::NurbsSurface ball = nurbs::MakeSphere(Eigen::Vector3d::Zero(), radius);
+  std::shared_ptr<PositionGoalTerm> goal;
+  std::unique_ptr<Problem> problem;
+  ProbeOnABall() {
+    Mechanism m;
+    const int fixed = m.AddBody(Body{"ball", true});
+    Body probe_body{"probe"};
+    probe_body.pose << radius, 0.02 * radius, 0, 1, 0, 0, 0;  // on the ball, 1.1° off the axis
+    const int probe = m.AddBody(probe_body);
+    problem = std::make_unique<Problem>(m);
+    const Attachment tip{probe, {0, 0, 0}};
+    goal = MakePositionGoal(tip, {-2.0 * radius, 0, 0});
+    problem->AddObjective(goal, 1.0);
+    problem->AddInequality(MakePointOnSurface(tip, fixed, &ball, {0.0, 0.5}));
+    problem->set_least_astonishment(0.0);
+  }
+};
+
 TEST(SolverTest, AnIndefiniteNewtonMatrixGetsItsExactStep) {
-  constexpr double radius = 0.01;
-  const nurbs::NurbsSurface ball = nurbs::MakeSphere(Eigen::Vector3d::Zero(), radius);
-  Mechanism m;
-  const int fixed = m.AddBody(Body{"ball", true});
-  Body probe_body{"probe"};
-  probe_body.pose << radius, 0.02 * radius, 0, 1, 0, 0, 0;  // on the ball, 1.1 deg off the axis
-  const int probe = m.AddBody(probe_body);
-  Problem p(m);
-  const Attachment tip{probe, {0, 0, 0}};
-  auto goal = MakePositionGoal(tip, {-2.0 * radius, 0, 0});
-  p.AddObjective(goal, 1.0);
-  p.AddInequality(MakePointOnSurface(tip, fixed, &ball, {0.0, 0.5}));
-  p.set_least_astonishment(0.0);
+  const ProbeOnABall b;
+  constexpr double radius = ProbeOnABall::radius;
+  const Problem& p = *b.problem;
+  const Mechanism& m = p.mechanism();
+  const auto& goal = b.goal;
   SolverOptions o;
   o.max_iterations = 10;
   o.second_order_check = true;
@@ -634,24 +647,14 @@ TEST(SolverTest, AnIndefiniteNewtonMatrixGetsItsExactStep) {
 // one under a floor of 1, converges onto it in 3 steps; a floor of 10 damps that step to a
 // fifth and turns it downhill, and the solve no longer finds the saddle.
 TEST(SolverTest, AnIndefiniteStepIsDampedToItsFloorOnlyBelowIt) {
-  constexpr double radius = 0.01;
-  const nurbs::NurbsSurface ball = nurbs::MakeSphere(Eigen::Vector3d::Zero(), radius);
+  constexpr double radius = ProbeOnABall::radius;
   auto solve = [&](double floor, Eigen::VectorXd* q) {
-    Mechanism m;
-    const int fixed = m.AddBody(Body{"ball", true});
-    Body probe_body{"probe"};
-    probe_body.pose << radius, 0.02 * radius, 0, 1, 0, 0, 0;
-    const int probe = m.AddBody(probe_body);
-    Problem p(m);
-    const Attachment tip{probe, {0, 0, 0}};
-    p.AddObjective(MakePositionGoal(tip, {-2.0 * radius, 0, 0}), 1.0);
-    p.AddInequality(MakePointOnSurface(tip, fixed, &ball, {0.0, 0.5}));
-    p.set_least_astonishment(0.0);
+    const ProbeOnABall b;
     SolverOptions o;
     o.max_iterations = 8;
     o.indefinite_floor = floor;
-    Solver s(p, o);
-    *q = m.InitialCoordinates();
+    Solver s(*b.problem, o);
+    *q = b.problem->mechanism().InitialCoordinates();
     return s.Solve(q);
   };
   Eigen::VectorXd exact, below, above;
