@@ -182,7 +182,7 @@ LineContacts::Next LineContacts::Follow(int k, const std::vector<contact::BodyPo
     return Next::kLeave;
   }
   // What the sections hold for the next solve: the gap where it dips between them (Margin).
-  const double margin = Margin(&p, poses, beta);
+  const double margin = Margin(&p, poses, beta, middle);
   for (int i = 0; i < kSections; ++i) p.state[i]->margin = margin;
   // Follow the line: toward the nearer side by half the spacing when it is nearer than the
   // middle (a line whose minimum has slid along). (Measured against a parabola through the
@@ -199,7 +199,7 @@ LineContacts::Next LineContacts::Follow(int k, const std::vector<contact::BodyPo
 }
 
 double LineContacts::Margin(Pair* p, const std::vector<contact::BodyPose>& poses,
-                            const double* beta) const {
+                            const double* beta, const Eigen::Vector4d& middle) const {
   // Three sections straddling a minimum of the gap along the line read it high by up to
   // ½ λ_min (h/2)² between them: on the paperclip soak's hooks, wires 1.9e-6 m through each other
   // while every section read 0 (docs/reliability.md, "Soak"). The section through the parabola's
@@ -209,16 +209,13 @@ double LineContacts::Margin(Pair* p, const std::vector<contact::BodyPose>& poses
   // lowest point the gap does not reach, and the probe there reads what the sections do.
   double at = 0.0;
   if (!SectionDip(beta[1], beta[0], beta[2], &at)) return 0.0;
-  const optimizer::SectionContactTerm::State& middle = *p->state[0];
-  // Followed from the nearer section's extremum (not a blend: g's parameters and the line's may
-  // straddle a periodic seam, as on a wire's tube).
+  // Placed as Place places a section, `at` spacings along the line; followed from the nearer
+  // section's extremum (not a blend: g's parameters and the line's may straddle a periodic seam,
+  // as on a wire's tube).
+  const Eigen::Vector4d in =
+      contact::IntoPairDomain(p->term[0]->f(), p->term[0]->g(), middle + at * p->spacing * p->step);
   const optimizer::SectionContactTerm::State& nearer =
-      std::abs(at) < 0.5 ? middle : *p->state[at < 0.0 ? 1 : 2];
-  Eigen::Vector4d u;
-  u[p->fixed] = middle.value + at * p->spacing;
-  u[1 - p->fixed] = middle.u[2];
-  u.tail<2>() = middle.u.head<2>();
-  const Eigen::Vector4d in = contact::IntoPairDomain(p->term[0]->f(), p->term[0]->g(), u);
+      *p->state[std::abs(at) < 0.5 ? 0 : (at < 0.0 ? 1 : 2)];
   p->probe->Place(p->fixed, in[p->fixed], nearer.u);
   p->term[0]->Update(poses, p->probe);
   const contact::CurveSurfaceExtremum& e = p->probe->ext;

@@ -107,10 +107,11 @@ class LineContacts {
   /// false when there is no room either side.
   bool Fit(Pair* p, const Eigen::Vector4d& middle) const;
   double Wrap(const Pair& p, double d) const;
-  /// The margin pair p's sections hold after a good tick at `poses` (beta: their distances): how
-  /// far the gap reaches below the least of them where it dips between them (0 where it does
-  /// not, or the probe there fails).
-  double Margin(Pair* p, const std::vector<contact::BodyPose>& poses, const double* beta) const;
+  /// The margin pair p's sections hold after a good tick at `poses` (beta: their distances;
+  /// middle: the middle section's parameters, pair order): how far the gap reaches below the
+  /// least of them where it dips between them (0 where it does not, or the probe there fails).
+  double Margin(Pair* p, const std::vector<contact::BodyPose>& poses, const double* beta,
+                const Eigen::Vector4d& middle) const;
 
   LineContactOptions options_;
   std::vector<Pair> pairs_;
