@@ -63,8 +63,8 @@ class BodyContactTerm final : public Term {
     /// The contact in the inner term's order: (u, v) on face f, (s, t) on face g.
     const contact::SurfaceSurfaceExtremum& extremum() const override { return inner().extremum(); }
     void Reseed(const Eigen::Vector4d& u_new) override { inner().Reseed(u_new); }
-    void Anchor() override { inner().Anchor(); }
-    void Rewind() override { inner().Rewind(); }
+    void Anchor(int slot) override { inner().Anchor(slot); }
+    void Rewind(int slot) override { inner().Rewind(slot); }
     /// The counters of both inner states, summed (ContactSlotState's).
     void SumCounters();
   };

@@ -104,9 +104,9 @@ class SurfaceContactTerm final : public Term {
     /// The line search's base point (TermState::Anchor): the next evaluation after Rewind
     /// solves afresh from its parameters, with the jump and undecided rules against them.
     FollowAnchor<Eigen::Vector4d> anchor;
-    void Anchor() override { anchor.Keep(u, q_f, q_g, valid); }
-    void Rewind() override {
-      anchor.Restore(&u, &q_f, &q_g, &valid);
+    void Anchor(int slot) override { anchor.Keep(slot, u, q_f, q_g, valid); }
+    void Rewind(int slot) override {
+      anchor.Restore(slot, &u, &q_f, &q_g, &valid);
       tracking = false;
     }
     contact::SurfaceSurfaceExtremum ext;
@@ -196,8 +196,8 @@ class PointOnSurfaceTerm final : public Term {
     Vector7d q_a, q_s;
     bool valid = false;
     FollowAnchor<Eigen::Vector2d> anchor;  ///< the line search's base point (TermState::Anchor)
-    void Anchor() override { anchor.Keep(u, q_a, q_s, valid); }
-    void Rewind() override { anchor.Restore(&u, &q_a, &q_s, &valid); }
+    void Anchor(int slot) override { anchor.Keep(slot, u, q_a, q_s, valid); }
+    void Rewind(int slot) override { anchor.Restore(slot, &u, &q_a, &q_s, &valid); }
     contact::PointSurfaceExtremum ext;
     contact::PlacedSurfacePoint eval;
     const contact::PointSurfaceExtremum& extremum() const { return ext; }

@@ -36,8 +36,8 @@ class CornerContactTerm final : public Term {
       point.valid = false;
     }
     void Deactivate() { active = false; }
-    void Anchor() override { point.Anchor(); }
-    void Rewind() override { point.Rewind(); }
+    void Anchor(int slot) override { point.Anchor(slot); }
+    void Rewind(int slot) override { point.Rewind(slot); }
   };
 
   /// `corner` is the corner's point on its body; `seed` where its closest point on `surface` is

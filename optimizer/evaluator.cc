@@ -386,11 +386,11 @@ void TermHessian::Fold(const Eigen::Vector4d& Q_a, const Eigen::Vector4d& Q_b) {
   W_b.setZero();
 }
 
-void ProblemEvaluator::ForEachBusyState(void (TermState::*f)()) {
+void ProblemEvaluator::ForEachBusyState(void (TermState::*f)(int), int slot) {
   // (An idle row, a free contact slot, stays idle through a solve: nothing to keep.)
   for (const auto& kind : items_) {
     for (const Item& it : kind) {
-      if (it.state && !it.idle) (it.state->*f)();
+      if (it.state && !it.idle) (it.state->*f)(slot);
     }
   }
 }

@@ -75,9 +75,10 @@ class ProblemEvaluator {
   void AddCurvature(const std::vector<Problem::Entry>& list, const Eigen::VectorXd& weights,
                     Eigen::MatrixXd* H);
 
-  /// TermState::Anchor / Rewind on every state of a row in use (a trial's base point).
-  void AnchorStates() { ForEachBusyState(&TermState::Anchor); }
-  void RewindStates() { ForEachBusyState(&TermState::Rewind); }
+  /// TermState::Anchor / Rewind on every state of a row in use (a trial's base point, or the
+  /// solve's best iterate).
+  void AnchorStates(int slot) { ForEachBusyState(&TermState::Anchor, slot); }
+  void RewindStates(int slot) { ForEachBusyState(&TermState::Rewind, slot); }
 
   const Problem& problem() const { return problem_; }
   /// The terms' per-solve states (contacts' tracked parameters, goal targets).
@@ -119,7 +120,7 @@ class ProblemEvaluator {
   std::array<JacobianRows, 3> kept_a_, kept_b_;  ///< KeepJacobians (objective rows unused)
   std::array<Eigen::MatrixXd, 3> dense_;
   void EvaluateKinds(const Eigen::VectorXd& q, int first, int last);
-  void ForEachBusyState(void (TermState::*f)());
+  void ForEachBusyState(void (TermState::*f)(int), int slot);
   std::vector<Eigen::Matrix3d> rotation_weights_;  // per moving block
   bool rotations_pending_ = false;
 };

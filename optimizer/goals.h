@@ -107,11 +107,11 @@ TermPtr Shifted(TermPtr term, const Eigen::VectorXd& rhs);
 struct ShiftedState final : TermState {
   std::unique_ptr<TermState> inner;  ///< r's state (nullptr for a stateless r)
   Eigen::VectorXd rhs;
-  void Anchor() override {
-    if (inner) inner->Anchor();
+  void Anchor(int slot) override {
+    if (inner) inner->Anchor(slot);
   }
-  void Rewind() override {
-    if (inner) inner->Rewind();
+  void Rewind(int slot) override {
+    if (inner) inner->Rewind(slot);
   }
 };
 

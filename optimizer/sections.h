@@ -37,8 +37,8 @@ class SectionContactTerm final : public Term {
     Vector7d q_a, q_b;
     bool valid = false;
     FollowAnchor<Eigen::Vector3d> anchor;  ///< the line search's base point (TermState::Anchor)
-    void Anchor() override { anchor.Keep(u, q_a, q_b, valid); }
-    void Rewind() override { anchor.Restore(&u, &q_a, &q_b, &valid); }
+    void Anchor(int slot) override { anchor.Keep(slot, u, q_a, q_b, valid); }
+    void Rewind(int slot) override { anchor.Restore(slot, &u, &q_a, &q_b, &valid); }
     contact::CurveSurfaceExtremum ext;
     contact::CurveSurfaceEval eval;
     Eigen::Vector3d direction = Eigen::Vector3d::Zero();  ///< what β is measured along

@@ -636,6 +636,9 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
   // from the linearized constraints. Near a warm start this is Newton on the KKT system
   // (quadratic convergence); the 1/μ block keeps redundant constraints regular.
   double best_score = std::numeric_limits<double>::infinity(), best_violation = 0.0, best_kkt = 0.0;
+  // The anchor slots (TermState::Anchor): the best iterate's contacts, and the line search's.
+  int best_slot = 1, search_slot = 0;
+  bool best_pending = false;  // the best iterate is the current one, its contacts not yet anchored
   const bool design = options_.design.enabled;
   double kkt_tolerance = options_.kkt_tolerance;
   for (st.iterations = 0; st.iterations < options_.max_iterations; ++st.iterations) {
@@ -717,6 +720,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
       lambda_i_best_ = lambda_i_;
       best_violation = st.max_violation;
       best_kkt = st.kkt_residual;
+      best_pending = true;  // its contacts anchored by this iteration's line search (below)
     }
     if (options_.time_budget_us > 0 &&
         std::chrono::duration<double, std::micro>(Clock::now() - start).count() >
@@ -810,12 +814,19 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
     // branch of its pair, far along a step the line search then halves) must not be where the
     // shorter one starts (measured on the paperclip soak: every halving of a 2 mm step re-solved
     // from the far side of the wire, 1.8 mm deep, and the last one was taken 0.16 mm deep).
-    ev_.AnchorStates();
+    // (In the slot not holding the best iterate's; an iterate just scored best keeps its own.)
+    const int anchored = search_slot;
+    ev_.AnchorStates(anchored);
+    if (best_pending) {
+      best_slot = anchored;
+      search_slot = 1 - anchored;
+      best_pending = false;
+    }
     const Eigen::VectorXd& from = split ? q_base_ : q;
     for (int k = 0, trials = design ? 30 : 8; k < trials; ++k) {
       q_try_ = from + alpha * step_;
       Normalize(&q_try_);
-      if (k > 0) ev_.RewindStates();
+      if (k > 0) ev_.RewindStates(anchored);
       ev_.Evaluate(q_try_);
       const double allowed = std::max({10.0 * st.max_violation, 1e3 * options_.constraint_tolerance,
                                        10.0 * alpha * alpha * step2});
@@ -852,10 +863,17 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
   if (!st.converged && best_score < std::numeric_limits<double>::infinity()) {
     const double score =
         std::max(st.max_violation / options_.constraint_tolerance, st.kkt_residual / kkt_tolerance);
-    if (!(score <= best_score)) {  // (also when the last iterate's residuals are NaN)
+    // (Also when the last iterate's residuals are NaN.)
+    if (!(score <= best_score)) {
       q = q_best_;
       lambda_e_ = lambda_e_best_;
       lambda_i_ = lambda_i_best_;
+      // Its contacts from where they stood there: re-solved from a later iterate's, one may
+      // land on another extremum of its pair (measured on the chain soak in line mode: an
+      // iterate scored at a violation of 2e-16, evaluated again from a later one's contacts,
+      // held its wires by sections on their far sides, 0.9 mm deep).
+      // (One not yet anchored is the iterate the loop stopped at: q, its contacts as they are.)
+      if (!best_pending) ev_.RewindStates(best_slot);
       ev_.Evaluate(q);
       st.max_violation = best_violation;
       st.kkt_residual = best_kkt;

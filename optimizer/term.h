@@ -57,6 +57,11 @@ struct TermHessian {
   }
 };
 
+/// The anchors a state keeps (TermState::Anchor). The solver anchors each line search's base
+/// point, alternating between the two so that the best iterate's (what an unconverged solve
+/// returns) is never overwritten by a later one's.
+inline constexpr int kAnchorSlots = 2;
+
 /// The per-solve state of a term: whatever changes while a problem is solved (a contact's
 /// tracked parameters and cached evaluation, a goal's target, scratch). A Term itself is
 /// immutable after construction and may be shared by threads; each solve owns the states of
@@ -64,35 +69,41 @@ struct TermHessian {
 class TermState {
  public:
   virtual ~TermState() = default;
-  /// The line search's base point: what Rewind returns to. A state that follows something
-  /// along the poses (a contact's tracked extremum) keeps where it stood there; a trial point
-  /// the line search rejects must not be where the next, shorter trial starts from.
-  virtual void Anchor() {}
-  virtual void Rewind() {}
+  /// A point the solve may come back to (slot < kAnchorSlots): what Rewind(slot) returns to. A
+  /// state that follows something along the poses (a contact's tracked extremum) keeps where it
+  /// stood there; a trial point the line search rejects must not be where the next, shorter trial
+  /// starts from, nor a later iterate's extremum (perhaps another branch of its pair) where the
+  /// best iterate, returned, is evaluated from.
+  virtual void Anchor(int /*slot*/) {}
+  virtual void Rewind(int /*slot*/) {}
 };
 
-/// What a state that follows an extremum along the poses keeps at the line search's base point
-/// (TermState::Anchor): its parameters, the two poses it was evaluated at and whether it was.
-/// Restore puts them back and marks the state `rewound`: its cached answer is a rejected
-/// trial's, so its next Update solves afresh (from the base point's parameters) whatever the
-/// poses.
+/// What a state that follows an extremum along the poses keeps at an anchor (TermState::Anchor,
+/// one per slot): its parameters, the two poses it was evaluated at and whether it was.
+/// Restore puts them back and marks the state `rewound`: its cached answer is another point's,
+/// so its next Update solves afresh (from the anchor's parameters) whatever the poses.
 template <class Params>
 struct FollowAnchor {
-  Params u{};
-  Vector7d q_a = Vector7d::Zero(), q_b = Vector7d::Zero();
-  bool valid = false;
+  struct Kept {
+    Params u{};
+    Vector7d q_a = Vector7d::Zero(), q_b = Vector7d::Zero();
+    bool valid = false;
+  };
+  Kept kept[kAnchorSlots];
   bool rewound = false;
-  void Keep(const Params& u_in, const Vector7d& qa, const Vector7d& qb, bool valid_in) {
-    u = u_in;
-    q_a = qa;
-    q_b = qb;
-    valid = valid_in;
+  void Keep(int slot, const Params& u_in, const Vector7d& qa, const Vector7d& qb, bool valid_in) {
+    Kept& k = kept[slot];
+    k.u = u_in;
+    k.q_a = qa;
+    k.q_b = qb;
+    k.valid = valid_in;
   }
-  void Restore(Params* u_out, Vector7d* qa, Vector7d* qb, bool* valid_out) {
-    *u_out = u;
-    *qa = q_a;
-    *qb = q_b;
-    *valid_out = valid;
+  void Restore(int slot, Params* u_out, Vector7d* qa, Vector7d* qb, bool* valid_out) {
+    const Kept& k = kept[slot];
+    *u_out = k.u;
+    *qa = k.q_a;
+    *qb = k.q_b;
+    *valid_out = k.valid;
     rewound = true;
   }
   /// Whether the state's last answer stands for poses (a, b), so that Update may return it;

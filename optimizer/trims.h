@@ -52,14 +52,14 @@ class TrimConstraintTerm final : public Term {
     bool valid = false;
     /// The line search's base point (TermState::Anchor): the pair's, and the edge's here.
     FollowAnchor<Eigen::Vector4d> anchor;
-    Eigen::Vector3d edge_anchor = Eigen::Vector3d::Zero();
-    void Anchor() override {
-      anchor.Keep(pair, q_a, q_b, valid);
-      edge_anchor = edge;
+    Eigen::Vector3d edge_anchor[kAnchorSlots] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+    void Anchor(int slot) override {
+      anchor.Keep(slot, pair, q_a, q_b, valid);
+      edge_anchor[slot] = edge;
     }
-    void Rewind() override {
-      anchor.Restore(&pair, &q_a, &q_b, &valid);
-      edge = edge_anchor;
+    void Rewind(int slot) override {
+      anchor.Restore(slot, &pair, &q_a, &q_b, &valid);
+      edge = edge_anchor[slot];
     }
     contact::SurfaceSurfaceExtremum pair_ext;
     contact::SurfacePairEval pair_eval;
@@ -131,16 +131,16 @@ class TrimmedContactTerm final : public Term {
     /// The line search's base point (TermState::Anchor): the measure followed and the face
     /// contact's (the material memos give the same answer either way).
     FollowAnchor<contact::TrimmedMeasure> anchor;  ///< with the measure followed
-    bool seeded_anchor = false;
-    void Anchor() override {
-      face_state->Anchor();
-      anchor.Keep(measure, q_a, q_b, valid);
-      seeded_anchor = seeded;
+    bool seeded_anchor[kAnchorSlots] = {false, false};
+    void Anchor(int slot) override {
+      face_state->Anchor(slot);
+      anchor.Keep(slot, measure, q_a, q_b, valid);
+      seeded_anchor[slot] = seeded;
     }
-    void Rewind() override {
-      face_state->Rewind();
-      anchor.Restore(&measure, &q_a, &q_b, &valid);
-      seeded = seeded_anchor;
+    void Rewind(int slot) override {
+      face_state->Rewind(slot);
+      anchor.Restore(slot, &measure, &q_a, &q_b, &valid);
+      seeded = seeded_anchor[slot];
     }
     const contact::SurfaceSurfaceExtremum& extremum() const override { return reported; }
     void Reseed(const Eigen::Vector4d& u_new) override {

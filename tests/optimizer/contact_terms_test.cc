@@ -314,39 +314,54 @@ TEST(ContactTermsTest, LooserTrackingTradesExactnessForSolves) {
   EXPECT_LE(solves[1], solves[0]);
 }
 
-TEST(ContactTermsTest, ARewoundStateSolvesFromTheAnchorNotFromARejectedTrial) {
-  // The solver's line search evaluates trial points and halves the step when one is rejected
-  // (Solver::Solve). A trial far along a step can carry a contact onto another branch of its
-  // pair; the next, shorter trial must start from the base point's contact, not from there.
-  // Scene: a 2 mm ball over a sheet with two ridges (crests at x = 5 and 15 mm, 3 mm high).
-  // At A the ball hangs over the valley between them, left of centre: its contact is the left
-  // ridge's minimum (4.4 mm apart), and the right ridge has a minimum of its own, farther
-  // (5.9 mm). B is a trial that carries the ball past the right ridge, where the left ridge's
-  // minimum no longer exists.
-  std::vector<std::vector<double>> heights(13, std::vector<double>(4));
-  for (int i = 0; i < 13; ++i) {
-    const double x = 0.02 * i / 12.0;
-    for (double& h : heights[static_cast<size_t>(i)]) {
-      h = 1.5e-3 * (1.0 - std::cos(2.0 * std::numbers::pi * x / 0.01));
+// A 2 mm ball over a sheet with two ridges (crests at x = 5 and 15 mm, 3 mm high). At A the
+// ball hangs over the valley between them, left of centre: its contact is the left ridge's
+// minimum (4.4 mm apart), and the right ridge has a minimum of its own, farther (5.9 mm). At B
+// the ball is past the right ridge, where the left ridge's minimum no longer exists.
+struct Ridges {
+  static std::vector<std::vector<double>> Heights() {
+    std::vector<std::vector<double>> heights(13, std::vector<double>(4));
+    for (int i = 0; i < 13; ++i) {
+      const double x = 0.02 * i / 12.0;
+      for (double& h : heights[static_cast<size_t>(i)]) {
+        h = 1.5e-3 * (1.0 - std::cos(2.0 * std::numbers::pi * x / 0.01));
+      }
     }
+    return heights;
   }
-  const nurbs::NurbsSurface sheet = nurbs::MakeHeightGridPatch(0.0, -0.005, 0.02, 0.01, heights);
-  const nurbs::NurbsSurface ball = nurbs::MakeSphere({0, 0, 0}, 0.002);
-  Mechanism mech;
-  const int a = mech.AddBody(Body{"ball"});
-  const int b = mech.AddBody(Body{"sheet"});
-  auto at = [](double x, double z) {
+  static Eigen::VectorXd At(double x, double z) {
     Eigen::VectorXd q(14);
     const double c = std::sqrt(0.5);  // the ball turned 90° about x: its poles off the contact
     q << x, 0, z, c, c, 0, 0, 0, 0, 0, 1, 0, 0, 0;
     return q;
-  };
-  const Eigen::VectorXd qA = at(0.0085, 0.008), qB = at(0.019, 0.004);
-  std::vector<BodyPose> poses;
-  mech.Poses(qA, &poses);
-  const Eigen::Vector4d seed = contact::ClosestSamplePair(ball, poses[static_cast<size_t>(a)],
-                                                          sheet, poses[static_cast<size_t>(b)], 33);
-  const auto term = MakeSurfaceContact(a, &ball, b, &sheet, seed);
+  }
+  Ridges() {
+    a = mech.AddBody(Body{"ball"});
+    b = mech.AddBody(Body{"sheet"});
+    std::vector<BodyPose> poses;
+    mech.Poses(qA, &poses);
+    term = MakeSurfaceContact(a, &ball, b, &sheet,
+                              contact::ClosestSamplePair(ball, poses[static_cast<size_t>(a)], sheet,
+                                                         poses[static_cast<size_t>(b)], 33));
+  }
+  const nurbs::NurbsSurface sheet = nurbs::MakeHeightGridPatch(0.0, -0.005, 0.02, 0.01, Heights());
+  const nurbs::NurbsSurface ball = nurbs::MakeSphere({0, 0, 0}, 0.002);
+  Mechanism mech;
+  int a = 0, b = 0;
+  const Eigen::VectorXd qA = At(0.0085, 0.008), qB = At(0.019, 0.004);
+  std::shared_ptr<SurfaceContactTerm> term;
+};
+
+TEST(ContactTermsTest, ARewoundStateSolvesFromTheAnchorNotFromARejectedTrial) {
+  // The solver's line search evaluates trial points and halves the step when one is rejected
+  // (Solver::Solve). A trial far along a step can carry a contact onto another branch of its
+  // pair; the next, shorter trial must start from the base point's contact, not from there.
+  // Scene: Ridges; B is a trial that carries the ball past the right ridge.
+  const Ridges r;
+  const Mechanism& mech = r.mech;
+  const auto& term = r.term;
+  const Eigen::VectorXd& qA = r.qA;
+  const Eigen::VectorXd& qB = r.qB;
   // The left flank's contact at A, and the right flank's minimum there (seeded beside it).
   const std::unique_ptr<TermState> fresh = term->MakeState();
   const double beta_A = Value(mech, *term, fresh.get(), qA, nullptr);
@@ -357,10 +372,10 @@ TEST(ContactTermsTest, ARewoundStateSolvesFromTheAnchorNotFromARejectedTrial) {
   for (const bool rewind : {true, false}) {
     const std::unique_ptr<TermState> st = term->MakeState();
     Value(mech, *term, st.get(), qA, nullptr);
-    st->Anchor();
+    st->Anchor(0);
     Value(mech, *term, st.get(), qB, nullptr);  // the rejected trial
     const Eigen::Vector4d u_B = Extremum(*term, st.get()).u;
-    if (rewind) st->Rewind();
+    if (rewind) st->Rewind(0);
     const double beta = Value(mech, *term, st.get(), qA, nullptr);  // a shorter trial: here A
     const Eigen::Vector4d u = Extremum(*term, st.get()).u;
     if (rewind) {
@@ -376,6 +391,21 @@ TEST(ContactTermsTest, ARewoundStateSolvesFromTheAnchorNotFromARejectedTrial) {
       EXPECT_GT(beta, beta_A + 1e-4);
     }
   }
+  // The two anchors are kept apart: A in one (the solve's best iterate), a later iterate B in
+  // the other (a line search's base point); an unconverged solve that returns A finds A's
+  // contact there, and the other anchor still holds B's.
+  const std::unique_ptr<TermState> st = term->MakeState();
+  Value(mech, *term, st.get(), qA, nullptr);
+  st->Anchor(1);
+  Value(mech, *term, st.get(), qB, nullptr);
+  const Eigen::Vector4d u_B = Extremum(*term, st.get()).u;
+  st->Anchor(0);
+  st->Rewind(1);
+  EXPECT_EQ(Value(mech, *term, st.get(), qA, nullptr), beta_A);
+  EXPECT_EQ(Extremum(*term, st.get()).u, u_A);
+  st->Rewind(0);
+  Value(mech, *term, st.get(), qB, nullptr);
+  EXPECT_EQ(Extremum(*term, st.get()).u, u_B);
 }
 
 }  // namespace
