@@ -30,6 +30,7 @@ void ClearanceGuard::Configure(const Mechanism& mechanism, std::vector<std::pair
   reach_ = std::move(reach);
   reach_.resize(static_cast<size_t>(mechanism.num_bodies()), 0.0);
   bounded_.assign(reach_.size(), 0);
+  return_bounded_.assign(reach_.size(), 0);
   q_ref_ = mechanism.InitialCoordinates();
   candidate_ref_ = q_ref_;
   clearance_.assign(pairs_.size(), kInfinity);
@@ -71,6 +72,17 @@ double ClearanceGuard::MotionFraction(const Eigen::VectorXd& q_ref, const Eigen:
     alpha = LargestFraction(alpha, [&](double a) { return Motion(b, q_ref, q, step, a) <= bound; });
   }
   return alpha;
+}
+
+bool ClearanceGuard::ReturnWithin(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& q,
+                                  double bound) const {
+  for (size_t k = 0; k < reach_.size(); ++k) {
+    // (A zero fraction of any step is the point q itself: q stands in for the step.)
+    if (return_bounded_[k] && !(Motion(static_cast<int>(k), q_ref, q, q, 0.0) <= bound)) {
+      return false;
+    }
+  }
+  return true;
 }
 
 bool ClearanceGuard::Within(const Eigen::VectorXd& q_ref, const std::vector<double>& clearance,

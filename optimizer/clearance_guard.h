@@ -70,6 +70,13 @@ class ClearanceGuard {
   /// Marks body b (or clears its mark) for MotionFraction. Allocation free.
   void Bound(int b, bool on) { bounded_[static_cast<size_t>(b)] = on; }
   void ClearBounds() { std::fill(bounded_.begin(), bounded_.end(), 0); }
+  /// Marks body b (or clears its mark) for ReturnWithin: its steps are free, but a solve that
+  /// does not converge returns no iterate that moved it farther than the bound. Allocation free.
+  void BoundReturn(int b, bool on) { return_bounded_[static_cast<size_t>(b)] = on; }
+  void ClearReturnBounds() { std::fill(return_bounded_.begin(), return_bounded_.end(), 0); }
+  /// Whether every body marked by BoundReturn is within `bound` of q_ref at q (Motion, at the
+  /// point q). Allocation free.
+  bool ReturnWithin(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& q, double bound) const;
 
   /// μ_b of the header for the segment q → q + α step against q_ref (0 for a fixed body).
   double Motion(int b, const Eigen::VectorXd& q_ref, const Eigen::VectorXd& q,
@@ -88,7 +95,8 @@ class ClearanceGuard {
   std::vector<std::pair<int, int>> pairs_;
   std::vector<double> reach_;
   Eigen::VectorXd q_ref_, candidate_ref_;
-  std::vector<char> bounded_;  ///< per body: MotionFraction bounds it
+  std::vector<char> bounded_;         ///< per body: MotionFraction bounds it
+  std::vector<char> return_bounded_;  ///< per body: ReturnWithin bounds it
   std::vector<double> clearance_, candidate_;
   bool armed_ = false;
 };

@@ -713,7 +713,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
     // what an unconverged solve returns.
     const double score =
         std::max(st.max_violation / options_.constraint_tolerance, st.kkt_residual / kkt_tolerance);
-    if (score < best_score) {
+    if (score < best_score && Returnable(q)) {
       best_score = score;
       q_best_ = q;
       lambda_e_best_ = lambda_e_;
@@ -864,7 +864,7 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
     const double score =
         std::max(st.max_violation / options_.constraint_tolerance, st.kkt_residual / kkt_tolerance);
     // (Also when the last iterate's residuals are NaN.)
-    if (!(score <= best_score)) {
+    if (!(score <= best_score) || !Returnable(q)) {
       q = q_best_;
       lambda_e_ = lambda_e_best_;
       lambda_i_ = lambda_i_best_;

@@ -55,7 +55,10 @@ struct SolverOptions {
   /// Needs the clearance guard (set_clearance_guard). The bodies are marked once a solve, when
   /// it first steps (Solver::set_motion_marker); the servo marks those of contacts near a
   /// pitchfork of their distance (ServoOptions::max_part_speed). A step it cuts to nothing
-  /// updates no multiplier (docs/optimizer.md, "Steps at the motion bound").
+  /// updates no multiplier (docs/optimizer.md, "Steps at the motion bound"). Bodies the guard
+  /// marks for the return bound instead (ClearanceGuard::BoundReturn; the servo's parts held by
+  /// a line) step freely, but an unconverged solve returns no iterate that carried them farther
+  /// than this from the anchor: the best one within it, at worst the start.
   double max_solve_motion = 0.0;
   /// A step the motion bound shortens keeps its normal part whole (Solver::SplitBoundedStep):
   /// a solve standing at its bound still restores its constraints instead of stopping there
@@ -273,6 +276,12 @@ class Solver {
   const Problem& problem_;
   SolverOptions options_;
   const ClearanceGuard* guard_ = nullptr;
+  /// Whether an unconverged solve may return q: every body the guard marks for it
+  /// (ClearanceGuard::BoundReturn) within the motion bound of the solve's anchor.
+  bool Returnable(const Eigen::VectorXd& q) const {
+    return !guard_ || !(options_.max_solve_motion > 0.0) ||
+           guard_->ReturnWithin(q_prev_, q, options_.max_solve_motion);
+  }
   MotionMarker motion_marker_ = nullptr;
   void* motion_context_ = nullptr;
   int n_ = 0;

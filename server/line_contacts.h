@@ -77,6 +77,9 @@ class LineContacts {
   const optimizer::SectionContactTerm::State& section(int k, int i) const {
     return *pairs_[static_cast<size_t>(k)].state[i];
   }
+  /// Pair k's bodies (mechanism indices; -1 for the world), f's then g's.
+  int body_f(int k) const { return pairs_[static_cast<size_t>(k)].term[0]->body_a(); }
+  int body_g(int k) const { return pairs_[static_cast<size_t>(k)].term[0]->body_b(); }
   /// Section i's inequality row (its multiplier's index).
   int row(int k, int i) const { return pairs_[static_cast<size_t>(k)].row[i]; }
   /// The middle section's parameters in the pair order.

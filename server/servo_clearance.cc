@@ -64,6 +64,14 @@ bool ServoLoop::BoundSnappingParts() {
   // (Asked only by a solve with a motion bound: max_part_speed > 0.)
   if (!bound_lagging_) guard_.ClearBounds();
   bool any = bound_lagging_;
+  // Parts held by a line: their steps are free (bounded, they jam: docs/reliability.md), but an
+  // unconverged solve returns no iterate that carried them past the bound.
+  guard_.ClearReturnBounds();
+  for (int k = 0; k < lines_.pairs(); ++k) {
+    if (!lines_.line(k)) continue;
+    if (lines_.body_f(k) >= 0) guard_.BoundReturn(lines_.body_f(k), true);
+    if (lines_.body_g(k) >= 0) guard_.BoundReturn(lines_.body_g(k), true);
+  }
   for (const Slot& s : slots_) {
     if (!s.plain || !s.state->active) continue;
     const auto& st = static_cast<const optimizer::SurfaceContactTerm::State&>(*s.state);

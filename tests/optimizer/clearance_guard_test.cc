@@ -254,6 +254,67 @@ TEST(ClearanceGuardTest, TheSolverAsksForItsMarksOnceWhenItStepsAndKeepsToTheBou
   EXPECT_NEAR(q[m.offset(1)], 0.01 / (1 + 1e-3), 1e-9);
 }
 
+TEST(ClearanceGuardTest, AnUnconvergedSolveReturnsNoIterateBeyondTheBoundOfAReturnMarkedBody) {
+  // Bodies 1 and 2 pulled by goals, body 1 marked for the return bound (ClearanceGuard::
+  // BoundReturn, 1 mm): its steps are free, and a solve that converges keeps its solution
+  // however far it went; one cut short by its iteration budget returns the best iterate within
+  // the bound of the start (here the start itself), and one whose last iterate lies within the
+  // bound returns that. Unmarked, the cut-short solve returns its last iterate.
+  const Mechanism m = Bodies();
+  ClearanceGuard guard;
+  guard.Configure(m, {}, {0.0, 0.02, 0.02});
+  const double bound = 1e-3;
+  struct Marker {
+    ClearanceGuard* guard;
+    bool mark;
+  } marker{&guard, true};
+  auto solve = [&](double pull, int iterations, Eigen::VectorXd* q) {
+    Problem p(m);
+    p.AddObjective(PositionGoal({1, {0, 0, 0}}, {pull, 0, 0}), 1.0);
+    p.AddObjective(PositionGoal({2, {0, 0, 0}}, {0, pull, 0}), 1.0);
+    SolverOptions options;
+    options.max_solve_motion = bound;
+    options.max_iterations = iterations;
+    Solver solver(p, options);
+    solver.set_clearance_guard(&guard);
+    solver.set_motion_marker(
+        [](void* c) {
+          auto* k = static_cast<Marker*>(c);
+          k->guard->ClearBounds();
+          k->guard->ClearReturnBounds();
+          k->guard->BoundReturn(1, k->mark);
+          return false;  // no body marked for the steps
+        },
+        &marker);
+    *q = m.InitialCoordinates();
+    const long before = testing::AllocationCount();
+    const SolveStats st = solver.Solve(q);
+    EXPECT_EQ(testing::AllocationCount() - before, 0);
+    EXPECT_EQ(st.motion_bounded_steps, 0);
+    return st;
+  };
+  const Eigen::VectorXd start = m.InitialCoordinates();
+  Eigen::VectorXd q;
+  // Converged 10 mm away: kept.
+  SolveStats st = solve(0.01, 10, &q);
+  EXPECT_TRUE(st.converged);
+  EXPECT_NEAR(q[m.offset(1)], 0.01 / (1 + 1e-3), 1e-9);
+  // One iteration (Newton's step to the goal, not yet known converged): the start, both bodies.
+  st = solve(0.01, 1, &q);
+  EXPECT_FALSE(st.converged);
+  EXPECT_EQ(guard.Motion(1, start, q, q, 0.0), 0.0);
+  EXPECT_EQ(guard.Motion(2, start, q, q, 0.0), 0.0);
+  // A pull of half the bound: the last iterate, within it.
+  st = solve(0.5 * bound, 1, &q);
+  EXPECT_FALSE(st.converged);
+  EXPECT_NEAR(q[m.offset(1)], 0.5 * bound / (1 + 1e-3), 1e-9);
+  // Unmarked: the last iterate, 10 mm away.
+  marker.mark = false;
+  st = solve(0.01, 1, &q);
+  EXPECT_FALSE(st.converged);
+  EXPECT_NEAR(q[m.offset(1)], 0.01 / (1 + 1e-3), 1e-9);
+}
+
 TEST(ClearanceGuardTest, ASolveAtItsMotionBoundStillRestoresItsContact) {
   // A probe 1e-7 m into a floor, pulled along it (and onto it) by a goal 10 mm away, its solve
   // motion bound 0.1 mm: the first Newton step leaves the bound most of the way. With

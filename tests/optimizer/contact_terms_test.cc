@@ -9,7 +9,10 @@
 #include <random>
 
 #include "nurbs/primitives.h"
+#include "optimizer/clearance_guard.h"
 #include "optimizer/contacts.h"
+#include "optimizer/goals.h"
+#include "optimizer/solver.h"
 #include "testing/contact_scenes.h"
 #include "testing/term_derivatives.h"
 
@@ -406,6 +409,46 @@ TEST(ContactTermsTest, ARewoundStateSolvesFromTheAnchorNotFromARejectedTrial) {
   st->Rewind(0);
   Value(mech, *term, st.get(), qB, nullptr);
   EXPECT_EQ(Extremum(*term, st.get()).u, u_B);
+}
+
+TEST(ContactTermsTest, AnUnconvergedSolveReturnsItsBestIterateWithThatIterateContacts) {
+  // An unconverged solve returns its best iterate (Solver::Solve), here its start A: the ball,
+  // marked for the return bound (ClearanceGuard::BoundReturn, 1 mm), was carried 10 mm to B by
+  // its one Newton step. Its contact there is the right ridge's; back at A it must be the left
+  // ridge's again, as it was at A, not the right ridge's minimum re-solved from B's.
+  Ridges r;
+  const std::unique_ptr<TermState> fresh = r.term->MakeState();
+  const double beta_A = Value(r.mech, *r.term, fresh.get(), r.qA, nullptr);
+  Problem p(r.mech);
+  p.AddObjective(PositionGoal({r.a, {0, 0, 0}}, r.qB.head<3>()), 1.0);
+  p.AddInequality(r.term);
+  ClearanceGuard guard;
+  guard.Configure(r.mech, {}, {0.002, 0.02});
+  SolverOptions options;
+  options.max_iterations = 1;
+  options.max_solve_motion = 1e-3;
+  Solver solver(p, options);
+  solver.set_clearance_guard(&guard);
+  solver.set_motion_marker(
+      [](void* g) {
+        static_cast<ClearanceGuard*>(g)->BoundReturn(0, true);
+        return false;
+      },
+      &guard);
+  Eigen::VectorXd q = r.qA;
+  const SolveStats st = solver.Solve(&q);
+  EXPECT_FALSE(st.converged);
+  EXPECT_EQ(q, r.qA);
+  const auto& contact = solver.data().Of(*r.term);
+  EXPECT_LT(contact.extremum().u[2], 0.5) << "the left ridge's contact";
+  EXPECT_EQ(contact.extremum().beta, beta_A);
+  // Its one step did reach B, past the right ridge: unmarked, the solve returns it.
+  guard.ClearReturnBounds();
+  solver.set_motion_marker(nullptr, nullptr);
+  q = r.qA;
+  solver.Solve(&q);
+  EXPECT_GT(q[0], 0.018);
+  EXPECT_GT(solver.data().Of(*r.term).extremum().u[2], 0.5) << "the right ridge's contact";
 }
 
 }  // namespace
