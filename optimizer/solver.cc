@@ -636,8 +636,9 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
   // from the linearized constraints. Near a warm start this is Newton on the KKT system
   // (quadratic convergence); the 1/μ block keeps redundant constraints regular.
   double best_score = std::numeric_limits<double>::infinity(), best_violation = 0.0, best_kkt = 0.0;
-  // The anchor slots (TermState::Anchor): the best iterate's contacts, and the line search's.
-  int best_slot = 1, search_slot = 0;
+  // The anchor slots (TermState::Anchor): the best iterate's contacts, and the line search's
+  // (the other one).
+  int best_slot = 1;
   bool best_pending = false;  // the best iterate is the current one, its contacts not yet anchored
   const bool design = options_.design.enabled;
   double kkt_tolerance = options_.kkt_tolerance;
@@ -815,11 +816,10 @@ SolveStats Solver::Solve(Eigen::VectorXd* q_io, const Eigen::VectorXd& anchor) {
     // shorter one starts (measured on the paperclip soak: every halving of a 2 mm step re-solved
     // from the far side of the wire, 1.8 mm deep, and the last one was taken 0.16 mm deep).
     // (In the slot not holding the best iterate's; an iterate just scored best keeps its own.)
-    const int anchored = search_slot;
+    const int anchored = 1 - best_slot;
     ev_.AnchorStates(anchored);
     if (best_pending) {
       best_slot = anchored;
-      search_slot = 1 - anchored;
       best_pending = false;
     }
     const Eigen::VectorXd& from = split ? q_base_ : q;
