@@ -15,7 +15,9 @@
 //
 //   ./build/bench/chain_soak [--seconds 150] [--from 0]   (print seconds from)
 //                            [--trace-from T --trace-to T]  (every device step's contacts)
-//                            [--lines] [--reach]  (ServoOptions::line_contacts, step_reach)
+//                            [--points] [--reach]  (ServoOptions::line_contacts off,
+//                                                    step_reach on)
+//                            [--dip 1e-7]  (LineContactOptions::dip, m)
 //                            [--normal-step]  (ServoOptions::bounded_normal_step)
 //                            [--floor F]  (ServoOptions::indefinite_floor)
 //                            [--iterations N]  (ServoOptions::max_iterations, default 10)
@@ -65,7 +67,8 @@ int main(int argc, char** argv) {
   int pass_every = 4;    // device steps (ms) between global passes
   int jitter = 0;        // seed of the tick and pass jitter; 0: none
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
+    if (!std::strcmp(argv[i], "--points")) options.line_contacts = false;
+    if (!std::strcmp(argv[i], "--dip") && i + 1 < argc) options.line.dip = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
     if (!std::strcmp(argv[i], "--normal-step")) options.bounded_normal_step = true;
     if (!std::strcmp(argv[i], "--floor") && i + 1 < argc)
@@ -241,12 +244,14 @@ int main(int argc, char** argv) {
         int lines = 0;
         for (int p = 0; p < servo.lines().pairs(); ++p) lines += servo.lines().line(p);
         std::printf(
-            "%6.0f s  contacts %d (max %d)  lines %d (placed %lld, moved %lld)  mean |F| %.3f N  "
+            "%6.0f s  contacts %d (max %d)  lines %d (placed %lld, moved %lld, respaced %lld)  "
+            "mean |F| %.3f N  "
             "events %d  violation %.1e  stalled %d\n",
             t + dt, snap.num_contacts, contacts_max, lines,
             static_cast<long long>(servo.lines().placements()),
-            static_cast<long long>(servo.lines().moves()), f_sum / 1000.0, events, worst_violation,
-            stalled);
+            static_cast<long long>(servo.lines().moves()),
+            static_cast<long long>(servo.lines().respaced()), f_sum / 1000.0, events,
+            worst_violation, stalled);
       }
       if (jammed_at < 0.0 && 2 * stalled > ticks) {
         jammed_at = t;

@@ -10,8 +10,8 @@
 // centre circles' distance less both radii, testing/torus_gap.h, every 10 ms) goes below
 // −1e-6 m: a crossing the rows did not see.
 //
-//   ./build/bench/hooks_turn [--seconds 11] [--lines] [--reach]
-//                            (ServoOptions::line_contacts, step_reach)
+//   ./build/bench/hooks_turn [--seconds 11] [--points] [--reach]
+//                            (ServoOptions::line_contacts off, step_reach on)
 //                            [--period 8] (s, the turn's; its peak rate is 40° × 2π / period)
 //                            [--pass-every 1] (device steps, 1 ms each, between global passes)
 //                            [--trace-from T] (every 10th device step's contacts and sections)
@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seconds") && i + 1 < argc) seconds = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--trace-from") && i + 1 < argc) trace_from = std::atof(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--lines")) options.line_contacts = true;
+    if (!std::strcmp(argv[i], "--points")) options.line_contacts = false;
     if (!std::strcmp(argv[i], "--reach")) options.step_reach = true;
     if (!std::strcmp(argv[i], "--period") && i + 1 < argc) period = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--pass-every") && i + 1 < argc) pass_every = std::atoi(argv[i + 1]);

@@ -6,8 +6,8 @@
 // gap of a contact carrying force). Deterministic apart from the clock: the figures to compare
 // solver changes by; server_rate is the threaded test of the targets.
 //
-//   ./build/bench/servo_profile [--steps 8000] [--iterations 10] [--kkt 1e-8] [--lines]
-//   (--lines: ServoOptions::line_contacts, off by default: what line contacts cost the drag)
+//   ./build/bench/servo_profile [--steps 8000] [--iterations 10] [--kkt 1e-8] [--points]
+//   (--points: ServoOptions::line_contacts off: what line contacts cost the drag)
 //
 // Under callgrind (scripts/bench_report.sh) run with --instr-atstart=no: the program starts the
 // instrumentation itself once the scene is loaded, which callgrind otherwise runs some 35x slower
@@ -39,8 +39,8 @@ int main(int argc, char** argv) {
   int steps = 8000, lag = 0;
   ServoOptions so;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--lines")) {
-      so.line_contacts = true;
+    if (!std::strcmp(argv[i], "--points")) {
+      so.line_contacts = false;
       continue;
     }
     if (i + 1 == argc) break;

@@ -34,6 +34,13 @@ bool SectionDip(double below, double middle, double above, double* at) {
   return true;
 }
 
+double LineSpacing(double lambda_min, double lambda_max, double dip) {
+  if (!(lambda_max > 0.0)) return INFINITY;
+  double h = 1.0 / lambda_max;
+  if (lambda_min > 0.0 && dip > 0.0) h = std::min(h, 2.0 * std::sqrt(2.0 * dip / lambda_min));
+  return h;
+}
+
 int LineContacts::AddPair(optimizer::Problem* p, int body_f, const nurbs::NurbsSurface* f,
                           int body_g, const nurbs::NurbsSurface* g) {
   Pair pair;
@@ -75,10 +82,11 @@ bool LineContacts::Enter(int k, const contact::SurfaceSurfaceExtremum& ext,
   // The sections hold the parameter of f the line runs along most (in length on f).
   p.fixed = (per_metre[0] * e.f.world.S_u).norm() >= (per_metre[1] * e.f.world.S_v).norm() ? 0 : 1;
   if (!(std::abs(per_metre[p.fixed]) > 0.0)) return false;
-  // Their spacing: the tight direction's length scale 1/λ_max, within half of either surface's
-  // radius of curvature along the line (a wire's bend: the sections stay on the arc the contact
-  // lies along).
-  double h = 1.0 / rc.eigenvalues[1];
+  // Their spacing: the tight direction's length scale 1/λ_max, close enough that the gap dips at
+  // most options_.dip between two of them (LineSpacing), within half of either surface's radius
+  // of curvature along the line (a wire's bend: the sections stay on the arc the contact lies
+  // along).
+  double h = LineSpacing(rc.eigenvalues[0], rc.eigenvalues[1], options_.dip);
   Eigen::Matrix3d K;
   for (const contact::PlacedSurfacePoint* s : {&e.f, &e.g}) {
     if (contact::ShapeOperator(*s, &K)) {
@@ -184,6 +192,20 @@ LineContacts::Next LineContacts::Follow(int k, const std::vector<contact::BodyPo
   // What the sections hold for the next solve: the gap where it dips between them (Margin).
   const double margin = Margin(&p, poses, beta, middle);
   for (int i = 0; i < kSections; ++i) p.state[i]->margin = margin;
+  // A line whose λ_min has grown since the sections were spaced (LineSpacing) lets the gap dip
+  // deeper between them: closer in about the middle once they are half as far again apart as
+  // the dip allows (a hysteresis of 2.25 in the dip).
+  if (rc.valid) {
+    const double need = LineSpacing(rc.eigenvalues[0], rc.eigenvalues[1], options_.dip);
+    if (p.h > 1.5 * need) {
+      p.h_free = std::min(p.h_free, need);
+      if (Fit(&p, middle)) {
+        Place(&p, middle);
+        ++respaced_;
+        return Next::kStay;
+      }
+    }
+  }
   // Follow the line: toward the nearer side by half the spacing when it is nearer than the
   // middle (a line whose minimum has slid along). (Measured against a parabola through the
   // three moved to its lowest point: chain_soak --lines apart at 221 s instead of 566 s; and

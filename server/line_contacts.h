@@ -29,7 +29,19 @@ struct LineContactOptions {
   /// when λ_min > leave · λ_max at the middle section.
   double enter = 0.1;
   double leave = 0.25;
+  /// The most the gap may dip below two neighbouring sections that both read it (m). Along the
+  /// line the gap is β + ½ λ_min δ² about its minimum, so with the minimum midway between
+  /// sections a spacing h reads it high by ½ λ_min (h/2)²: the spacing is kept within
+  /// 2 √(2 dip / λ_min) (LineSpacing). At entry λ_min is still a tenth of λ_max, and the tight
+  /// direction's 1/λ_max alone let the wires through each other by 1.5e-6 m between sections that
+  /// all read 0 (chain_soak --lines at 206.298 s: docs/reliability.md, "Soak").
+  double dip = 1e-7;
 };
+
+/// The spacing (m) of a line's sections for relative curvature eigenvalues λ_min ≤ λ_max (> 0):
+/// the tight direction's length scale 1/λ_max, and where λ_min > 0 within 2 √(2 dip / λ_min), so
+/// the gap dips at most `dip` below two neighbours. +inf without a positive λ_max.
+double LineSpacing(double lambda_min, double lambda_max, double dip);
 
 /// Where a line's gap may dip below its sections: the lowest point of the parabola through three
 /// equally spaced sections' distances `below`, `middle` and `above` (at −1, 0 and 1 spacings),
@@ -86,6 +98,8 @@ class LineContacts {
   Eigen::Vector4d MiddleU(int k) const;
   int64_t placements() const { return placements_; }
   int64_t moves() const { return moves_; }
+  /// Lines whose sections were brought closer about their middle (LineContactOptions::dip).
+  int64_t respaced() const { return respaced_; }
 
  private:
   struct Pair {
@@ -118,7 +132,7 @@ class LineContacts {
 
   LineContactOptions options_;
   std::vector<Pair> pairs_;
-  int64_t placements_ = 0, moves_ = 0;
+  int64_t placements_ = 0, moves_ = 0, respaced_ = 0;
 };
 
 }  // namespace tangent::server

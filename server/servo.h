@@ -49,12 +49,10 @@ struct ServoOptions {
   /// sweeps the alternatives, docs/benchmarks.md).
   optimizer::ContactTracking tracking;
   /// Line contacts (server/line_contacts.h): a nearly conformal contact of a declared pair of
-  /// untrimmed surfaces is held by three sections across its line instead of its one point.
-  /// Off by default: on the paperclip soak it holds the chain to 264 s instead of 139 s, but
-  /// the figure moves between 74 and 566 s with the thresholds and the build, and the hooks'
-  /// turn (bench/hooks_turn) comes apart with it; the paperclips' tick costs 1.19x the
-  /// instructions (`servo_profile --lines`; docs/reliability.md, "Soak").
-  bool line_contacts = false;
+  /// untrimmed surfaces is held by three sections across its line instead of its one point,
+  /// spaced so that the gap dips at most LineContactOptions::dip between them. With the floor
+  /// below, the paperclip soak holds the chain for the hour (docs/reliability.md, "Soak").
+  bool line_contacts = true;
   LineContactOptions line;
   /// Face contacts (server/face_contacts.h): a declared pair of two untrimmed flat faces is held
   /// by the corners of each lying over the other (contact::GlobalOptions::face_pairs). Off, such
@@ -64,8 +62,10 @@ struct ServoOptions {
   bool step_reach = false;
   /// optimizer::SolverOptions::bounded_normal_step (off by default).
   bool bounded_normal_step = false;
-  /// optimizer::SolverOptions::indefinite_floor (0 by default: see there).
-  double indefinite_floor = 0.0;
+  /// optimizer::SolverOptions::indefinite_floor: 10 (the solver's own default is 0). Without it
+  /// a line-held clip's nearly free turn takes steps of millimetres along an eigenvalue near
+  /// zero, and the soak comes apart in five of six runs (docs/reliability.md, "Soak").
+  double indefinite_floor = 10.0;
   /// No tunnelling (docs/stability.md): every step is kept within the global stage's last
   /// clearance certificate (AdoptClearances), so no pair of parts certified apart can pass
   /// through each other before the stage looks again, however late that is.

@@ -214,8 +214,11 @@ TEST(ConformalTest, TwoHooksTurnedFromCrossingTowardsParallelStayHookedOnBothMin
   EXPECT_LE(run.worst_x, 1.5 + 1e-6);
   EXPECT_NEAR(run.pulled_force, -0.6, 0.001);  // k x (2 mm − 0 mm held) at 300 N/m
   // Beyond the pitchfork both minima are rows, each carrying a share of the load, the same
-  // turned either way.
-  EXPECT_EQ(run.most_contacts, 2);
+  // turned either way. (At the pitchfork, for a few ticks, the minima's two rows are reported
+  // beside the line's middle section, which then carries nothing: three; the line then
+  // follows one minimum and a point row the other.)
+  EXPECT_GE(run.most_contacts, 2);
+  EXPECT_LE(run.most_contacts, 3);
   for (int peak = 0; peak < 2; ++peak) {
     EXPECT_GT(run.peak_force[peak], 0.6);
     EXPECT_GT(run.peak_smaller_share[peak], 0.25);

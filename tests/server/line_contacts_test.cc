@@ -29,7 +29,7 @@ struct Cylinders {
   std::unique_ptr<optimizer::Solver> solver;
   LineContacts lines;
   std::vector<contact::BodyPose> poses;
-  Cylinders() {
+  explicit Cylinders(const LineContactOptions& options = {}) : lines(options) {
     optimizer::Mechanism m;
     m.AddBody(optimizer::Body{"a"});
     optimizer::Body body_b{"b"};
@@ -182,11 +182,98 @@ TEST(LineContactsTest, SectionDipIsTheParabolasLowestPointBetweenTheSections) {
   EXPECT_FALSE(SectionDip(NAN, 1e-4, 2e-4, &at));
 }
 
+// The section spacing when the cylinders are turned by `angle` and the pair enters line mode
+// there; the gap's dip below the sections when b then moves `along` spacings along the line.
+struct Spaced {
+  double spacing = 0.0, dip = 0.0;
+};
+Spaced SpacedAt(Cylinders* c, double angle, double along) {
+  Spaced r;
+  c->Turn(angle, kGap);
+  contact::SurfacePairEval e;
+  const contact::SurfaceSurfaceExtremum x = c->Pair(&e);
+  EXPECT_EQ(x.status, contact::ExtremalStatus::kConverged);
+  EXPECT_TRUE(c->lines.Enter(0, x, e)) << angle;
+  c->Measure();
+  r.spacing = (c->lines.section(0, 2).ext.p_f - c->lines.section(0, 0).ext.p_f).norm();
+  c->Turn(angle, kGap, along * r.spacing);
+  c->Measure();
+  double least = INFINITY;
+  for (int i = 0; i < LineContacts::kSections; ++i) {
+    least = std::min(least, c->lines.section(0, i).ext.beta);
+  }
+  r.dip = least - kGap;  // (kGap: the skew axes' nearest points, wherever they are)
+  return r;
+}
+
+TEST(LineContactsTest, TheSectionsAreSpacedSoTheGapDipsAtMostTheDipBetweenThem) {
+  // Along the line the gap is β + ½ λ_min δ²: with the minimum midway between two sections they
+  // read it high by ½ λ_min (h/2)². The spacing keeps that within LineContactOptions::dip, and
+  // the bound is what sets it here (the tight direction's 1/λ_max is 5 mm).
+  for (double angle : {0.1, 0.2, 0.3}) {
+    Cylinders c;
+    const Spaced s = SpacedAt(&c, angle, 0.5);
+    const double dip = LineContactOptions{}.dip;
+    std::printf("turned %.1f rad: spacing %.3e m, the gap %.3e m below the sections midway\n",
+                angle, s.spacing, s.dip);
+    EXPECT_LT(s.spacing, 0.5 / (2.0 / kRadius)) << angle;
+    EXPECT_LE(s.dip, dip) << angle;
+    EXPECT_GT(s.dip, 0.8 * dip) << angle << ": the bound, not looser";
+  }
+  // Without the bound (dip 0: the tight direction's length scale alone) the same line lets the
+  // gap dip a hundred times deeper between the sections.
+  LineContactOptions loose;
+  loose.dip = 0.0;
+  Cylinders c(loose);
+  EXPECT_GT(SpacedAt(&c, 0.3, 0.5).dip, 100 * LineContactOptions{}.dip);
+  EXPECT_NEAR(LineSpacing(4.0, 100.0, 1e-7), 2.0 * std::sqrt(2.0 * 1e-7 / 4.0), 1e-18);
+  EXPECT_EQ(LineSpacing(-4.0, 100.0, 1e-7), 0.01);  // past the pitchfork: 1/λ_max
+  EXPECT_EQ(LineSpacing(4.0, 100.0, 0.0), 0.01);
+  EXPECT_EQ(LineSpacing(0.0, 0.0, 1e-7), INFINITY);
+}
+
+TEST(LineContactsTest, ALineWhoseCurvatureGrowsBringsItsSectionsCloser) {
+  // Entered nearly parallel (λ_min tiny: spaced by 1/λ_max), then turned to 0.3 rad, still a
+  // line (λ_min below leave · λ_max): the sections, 5 mm apart, would let the gap dip 1e-5 m
+  // between them; after the next good tick they are brought closer about the middle.
+  Cylinders c;
+  const Spaced wide = SpacedAt(&c, 0.01, 0.0);
+  ASSERT_GT(RatioAt(0.3), 0.0);
+  ASSERT_LT(RatioAt(0.3), LineContactOptions{}.leave);
+  c.Turn(0.3, kGap);
+  c.Measure();
+  Eigen::Vector4d u;
+  const long before = testing::AllocationCount();
+  ASSERT_EQ(c.lines.Follow(0, c.poses, &u), LineContacts::Next::kStay);
+  EXPECT_EQ(testing::AllocationCount() - before, 0);
+  EXPECT_EQ(c.lines.respaced(), 1);
+  c.Measure();
+  const double spacing = (c.lines.section(0, 2).ext.p_f - c.lines.section(0, 0).ext.p_f).norm();
+  std::printf("spacing %.3e m entered, %.3e m at 0.3 rad\n", wide.spacing, spacing);
+  EXPECT_LT(spacing, 0.1 * wide.spacing);
+  // Midway between two of them the gap now dips about the dip below them (to 5 %: the spacing
+  // is mapped into f's parameter at the rate measured at entry, here 1 % off at 0.3 rad).
+  c.Turn(0.3, kGap, 0.5 * spacing);
+  c.Measure();
+  double least = INFINITY;
+  for (int i = 0; i < LineContacts::kSections; ++i) {
+    least = std::min(least, c.lines.section(0, i).ext.beta);
+  }
+  EXPECT_LE(least - kGap, 1.05 * LineContactOptions{}.dip);
+  // Another good tick at the same curvature leaves them where they are.
+  ASSERT_EQ(c.lines.Follow(0, c.poses, &u), LineContacts::Next::kStay);
+  EXPECT_EQ(c.lines.respaced(), 1);
+}
+
 TEST(LineContactsTest, TheSectionsHoldTheGapWhereItDipsBetweenThem) {
   // Two cylinders 0.3 rad from parallel: the gap along the line is least where the skew axes
   // are nearest. Moved along the axis so that this lies between two sections, the sections read
-  // more than the gap; the margin they then hold is how much more, measured at the dip.
-  Cylinders c;
+  // more than the gap; the margin they then hold is how much more, measured at the dip. (Spaced
+  // by 1/λ_max alone, dip 0, so that they straddle a dip worth measuring; spaced by the dip
+  // bound the margin holds what a line's curvature does that the bound did not foresee.)
+  LineContactOptions loose;
+  loose.dip = 0.0;
+  Cylinders c(loose);
   c.Turn(0.3, kGap);
   contact::SurfacePairEval e;
   const contact::SurfaceSurfaceExtremum x = c.Pair(&e);
