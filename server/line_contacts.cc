@@ -194,8 +194,12 @@ LineContacts::Next LineContacts::Follow(int k, const std::vector<contact::BodyPo
   for (int i = 0; i < kSections; ++i) p.state[i]->margin = margin;
   // A line whose λ_min has grown since the sections were spaced (LineSpacing) lets the gap dip
   // deeper between them: closer in about the middle once they are half as far again apart as
-  // the dip allows (a hysteresis of 2.25 in the dip).
-  if (rc.valid) {
+  // the dip allows (a hysteresis of 2.25 in the dip). Only while no dip is measured between
+  // them: where there is one, the margin holds it, and sections respaced about the middle would
+  // hold the margin measured between the old ones (measured: chain_soak respaced twice in the
+  // second it came apart, at 1,336 s, and held the hour without respacing; with this condition
+  // it does not respace on the soak at all).
+  if (rc.valid && margin == 0.0) {
     const double need = LineSpacing(rc.eigenvalues[0], rc.eigenvalues[1], options_.dip);
     if (p.h > 1.5 * need) {
       p.h_free = std::min(p.h_free, need);
