@@ -11,6 +11,7 @@
 // its wall), looped.
 //
 //   ./build/bench/server_rate [--seconds 60] [--rate 4000] [--scene paperclips]
+//                             [--lines 1]  (0: ServoOptions::line_contacts off, for the cost)
 
 #include <sys/prctl.h>
 
@@ -38,12 +39,14 @@ int main(int argc, char** argv) {
   double seconds = 60.0, rate = 4000.0;
   bool spin_for_device = true;
   std::string scene_name = "paperclips";
+  bool lines = true;
   const bool verbose = std::getenv("TANGENT_VERBOSE") != nullptr;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--rate")) rate = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--spin-for-device")) spin_for_device = std::atoi(argv[i + 1]) != 0;
     if (!std::strcmp(argv[i], "--scene")) scene_name = argv[i + 1];
+    if (!std::strcmp(argv[i], "--lines")) lines = std::atoi(argv[i + 1]) != 0;
   }
   const std::string base = std::string(TANGENT_SCENES_DIR) + "/" + scene_name;
   auto scene = LoadScene(base + ".json");
@@ -58,6 +61,7 @@ int main(int argc, char** argv) {
   }
   EngineOptions eo;
   eo.rate_hz = rate;
+  eo.servo.line_contacts = lines;
   eo.spin_for_device = spin_for_device;
   Engine engine(*scene, eo);
   std::printf(
