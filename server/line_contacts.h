@@ -98,7 +98,8 @@ class LineContacts {
   Eigen::Vector4d MiddleU(int k) const;
   int64_t placements() const { return placements_; }
   int64_t moves() const { return moves_; }
-  /// Lines whose sections were brought closer about their middle (LineContactOptions::dip).
+  /// How many times a line's sections were brought closer about its middle
+  /// (LineContactOptions::dip; Follow).
   int64_t respaced() const { return respaced_; }
 
  private:

@@ -56,6 +56,18 @@ struct Cylinders {
     return contact::SolveSurfaceSurface(
         a, poses[0], b, poses[1], Eigen::Vector4d(0.0, 0.5, 0.5, 0.5), contact::kContinuation, e);
   }
+  // The least of the sections' distances, and the world distance between the middle section's
+  // point on a and the +1 section's.
+  double LeastSection() const {
+    double least = INFINITY;
+    for (int i = 0; i < LineContacts::kSections; ++i) {
+      least = std::min(least, lines.section(0, i).ext.beta);
+    }
+    return least;
+  }
+  double Spacing() const {
+    return (lines.section(0, 2).ext.p_f - lines.section(0, 0).ext.p_f).norm();
+  }
   // The sections evaluated at the poses (as the servo's solve leaves them).
   void Measure() {
     for (int i = 0; i < LineContacts::kSections; ++i) {
@@ -195,14 +207,10 @@ Spaced SpacedAt(Cylinders* c, double angle, double along) {
   EXPECT_EQ(x.status, contact::ExtremalStatus::kConverged);
   EXPECT_TRUE(c->lines.Enter(0, x, e)) << angle;
   c->Measure();
-  r.spacing = (c->lines.section(0, 2).ext.p_f - c->lines.section(0, 0).ext.p_f).norm();
+  r.spacing = c->Spacing();
   c->Turn(angle, kGap, along * r.spacing);
   c->Measure();
-  double least = INFINITY;
-  for (int i = 0; i < LineContacts::kSections; ++i) {
-    least = std::min(least, c->lines.section(0, i).ext.beta);
-  }
-  r.dip = least - kGap;  // (kGap: the skew axes' nearest points, wherever they are)
+  r.dip = c->LeastSection() - kGap;  // (kGap: the skew axes' nearest points, wherever they are)
   return r;
 }
 
@@ -248,18 +256,14 @@ TEST(LineContactsTest, ALineWhoseCurvatureGrowsBringsItsSectionsCloser) {
   EXPECT_EQ(testing::AllocationCount() - before, 0);
   EXPECT_EQ(c.lines.respaced(), 1);
   c.Measure();
-  const double spacing = (c.lines.section(0, 2).ext.p_f - c.lines.section(0, 0).ext.p_f).norm();
+  const double spacing = c.Spacing();
   std::printf("spacing %.3e m entered, %.3e m at 0.3 rad\n", wide.spacing, spacing);
   EXPECT_LT(spacing, 0.1 * wide.spacing);
   // Midway between two of them the gap now dips about the dip below them (to 5 %: the spacing
   // is mapped into f's parameter at the rate measured at entry, here 1 % off at 0.3 rad).
   c.Turn(0.3, kGap, 0.5 * spacing);
   c.Measure();
-  double least = INFINITY;
-  for (int i = 0; i < LineContacts::kSections; ++i) {
-    least = std::min(least, c.lines.section(0, i).ext.beta);
-  }
-  EXPECT_LE(least - kGap, 1.05 * LineContactOptions{}.dip);
+  EXPECT_LE(c.LeastSection() - kGap, 1.05 * LineContactOptions{}.dip);
   // Another good tick at the same curvature leaves them where they are.
   ASSERT_EQ(c.lines.Follow(0, c.poses, &u), LineContacts::Next::kStay);
   EXPECT_EQ(c.lines.respaced(), 1);
@@ -280,16 +284,13 @@ TEST(LineContactsTest, TheSectionsHoldTheGapWhereItDipsBetweenThem) {
   ASSERT_EQ(x.status, contact::ExtremalStatus::kConverged);
   ASSERT_TRUE(c.lines.Enter(0, x, e));
   c.Measure();
-  const double spacing = (c.lines.section(0, 2).ext.p_f - c.lines.section(0, 0).ext.p_f).norm();
+  const double spacing = c.Spacing();
   ASSERT_GT(spacing, 1e-3);
   Eigen::Vector4d u;
   for (double along : {0.3, 0.55, -0.4}) {
     c.Turn(0.3, kGap, along * spacing);
     c.Measure();
-    double least = INFINITY;
-    for (int i = 0; i < LineContacts::kSections; ++i) {
-      least = std::min(least, c.lines.section(0, i).ext.beta);
-    }
+    const double least = c.LeastSection();
     ASSERT_GT(least - kGap, 1e-7) << along << ": the sections straddle the dip";
     const long before = testing::AllocationCount();
     ASSERT_EQ(c.lines.Follow(0, c.poses, &u), LineContacts::Next::kStay);
