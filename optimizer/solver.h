@@ -78,6 +78,10 @@ struct SolverOptions {
   /// its factorization. Kept only if it lowers the violation; the multipliers are not changed.
   /// 0: never.
   double finish_violation = 1e3;
+  /// An unconverged solve's returned iterate, off its rows by more than their tolerance and at
+  /// most `finish_violation` times it, moved onto them by the least motion
+  /// (Solver::RestoreFeasibility; docs/optimizer.md, "Stopping").
+  bool restore_feasibility = true;
   /// Compute the reduced-Hessian statistic after each solve (dense eigen-decomposition,
   /// allocates: for tests and design studies, not for the servo loop).
   bool second_order_check = false;
@@ -106,7 +110,7 @@ struct SolverOptions {
 
 struct SolveStats {
   int iterations = 0;   ///< Newton iterations
-  int corrections = 0;  ///< finishing corrections kept (SolverOptions::finish_violation)
+  int corrections = 0;  ///< finishing corrections and feasibility restorations kept
   /// Newton steps taken on a matrix that is not positive definite (Solver::IndefiniteStep).
   int indefinite_steps = 0;
   double max_violation = 0.0;
@@ -260,6 +264,12 @@ class Solver {
   /// residuals its own). Kept (q, ev_, grad_e_, kkt_ and st at the corrected point) only if it
   /// lowers the violation with finite residuals; otherwise all are as they came.
   void FinishingCorrection(Eigen::VectorXd* q, SolveStats* st);
+  /// An unconverged solve's returned iterate *q (ev_ at it, st's violation its own) moved onto
+  /// its equality rows and the inequality rows violated or loaded there by the least motion:
+  /// up to two Gauss–Newton steps on those rows alone, each kept only if it lowers the violation
+  /// within the clearance guard and the return bound. ev_, grad_e_, kkt_ and st's residuals at
+  /// the *q it leaves.
+  void RestoreFeasibility(Eigen::VectorXd* q, SolveStats* st);
   /// Design mode: the BFGS update of B_ with the step from q_old_ to q and the change of the
   /// design gradient (gd_ − gd_old_).
   void UpdateDesignCurvature(const Eigen::VectorXd& q);

@@ -364,19 +364,37 @@ TEST(ClearanceGuardTest, ASolveAtItsMotionBoundStillRestoresItsContact) {
   // The floor carries the goal's pull onto it (1 mm of the goal's unit weight), not more.
   EXPECT_NEAR(solver.inequality_multipliers()[0], 1e-3, 1e-5);
 
-  // Without the split (the default) the solve stops at the bound, through the floor, and says
-  // so; its multiplier is what the first step left, not μ c more for every iteration after it
-  // (μ c = 0.1 an iteration here).
+  // Without the split (the default) the solve stops at the bound, and says so; its multiplier
+  // is what the first step left, not μ c more for every iteration after it (μ c = 0.1 an
+  // iteration here). The iterate it stops at stands through the floor (5e-8 m or more: 1 % of
+  // the correction taken), and is returned moved onto it by the least motion
+  // (Solver::RestoreFeasibility), within the bound, allocating nothing.
   options.bounded_normal_step = false;
   Solver plain(p, options);
   guarded(&plain);
   q = start;
+  const long before_plain = testing::AllocationCount();
   const SolveStats stopped = plain.Solve(&q);
+  EXPECT_EQ(testing::AllocationCount() - before_plain, 0);
   EXPECT_TRUE(stopped.stopped_at_bound);
   EXPECT_FALSE(stopped.converged);
   EXPECT_LT(stopped.iterations, 5);
-  EXPECT_GT(stopped.max_violation, 5e-8);
   EXPECT_LT(plain.inequality_multipliers()[0], 1e-2);
+  EXPECT_GE(stopped.corrections, 1);
+  EXPECT_LE(stopped.max_violation, options.constraint_tolerance);
+  EXPECT_GE(q[m.offset(1) + 2], -options.constraint_tolerance);
+  EXPECT_LE(guard.Motion(1, start, q, q, 0.0), 1e-4 * (1 + 1e-9));
+
+  // The correction off: the iterate the solve stopped at, through the floor.
+  options.restore_feasibility = false;
+  Solver unrestored(p, options);
+  guarded(&unrestored);
+  q = start;
+  const SolveStats through = unrestored.Solve(&q);
+  EXPECT_TRUE(through.stopped_at_bound);
+  EXPECT_EQ(through.corrections, 0);
+  EXPECT_GT(through.max_violation, 5e-8);
+  EXPECT_LT(q[m.offset(1) + 2], -5e-8);
 }
 
 }  // namespace
