@@ -35,6 +35,10 @@ struct GlobalOptions {
   /// servo holds such a pair as a line (ServoOptions::line_contacts, server/line_contacts.h):
   /// as a point it is degenerate.
   bool accept_continuum = false;
+  /// A singular extremum is such a continuum only where its relative curvature is line-like,
+  /// λ_min < continuum_ratio · λ_max (the servo's LineContactOptions::enter): where the servo
+  /// would hold it as a line.
+  double continuum_ratio = 0.1;
   /// Hold declared pairs of two untrimmed flat faces (nurbs/flat.h) by their corners
   /// (FindFaces): found and kept by the corner of either face lying over the other nearest to it
   /// (contact/face_gap.h), as the servo holds them (server/face_contacts.h).

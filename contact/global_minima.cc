@@ -40,8 +40,7 @@ void NestedPairMinimum(const nurbs::NurbsSurface& f, const BodyPose& pose_f,
   const Eigen::Vector4d seed = ClosestSamplePair(f, pose_f, g, pose_g, 4);
   SurfacePairEval at;
   const SurfaceSurfaceExtremum e = SolveSurfaceSurface(f, pose_f, g, pose_g, seed, {}, &at);
-  const bool taken = (e.status == ExtremalStatus::kConverged ||
-                      (options.accept_continuum && e.status == ExtremalStatus::kSingular)) &&
+  const bool taken = (e.status == ExtremalStatus::kConverged || LineContinuum(options, e, at)) &&
                      e.beta < options.activation && e.beta > -options.max_penetration &&
                      e.alignment < 0.0;
   if (!taken) return;

@@ -21,6 +21,19 @@ inline constexpr double kSamePoint = 1e-8;
 
 bool SamePoints(const GlobalContact& x, const GlobalContact& y);
 
+/// Whether e, a singular extremum (ExtremalStatus::kSingular; `at` the pair's evaluation there),
+/// is a continuum the servo holds as a line (GlobalOptions::accept_continuum): its relative
+/// curvature line-like, λ_min < continuum_ratio · λ_max with λ_max > 0. Singular elsewhere (a
+/// ball on a hole's rim, where the wall's border meets the plate's trim edge; a pole) it is no
+/// line, and held as a point it is lost again every tick (docs/contact.md, "Line contacts").
+inline bool LineContinuum(const GlobalOptions& options, const SurfaceSurfaceExtremum& e,
+                          const SurfacePairEval& at) {
+  if (!options.accept_continuum || e.status != ExtremalStatus::kSingular) return false;
+  const RelativeCurvature rc = RelativeCurvatureOf(at);
+  return rc.valid && rc.eigenvalues[1] > 0.0 &&
+         rc.eigenvalues[0] < options.continuum_ratio * rc.eigenvalues[1];
+}
+
 /// Appends c to *out unless a contact on the same points is there.
 void AddFound(const GlobalContact& c, std::vector<GlobalContact>* out);
 

@@ -243,14 +243,14 @@ void ClusterSeeds(GlobalContactStage::Impl& m, const GlobalOptions& options, con
 // interior extremum (or one held on a trimmed face's border, or a continuum when line contacts
 // take them) with facing normals, or an edge's, with −max_penetration < β < activation.
 bool IsContact(const Watched& wa, const Watched& wb, const GlobalOptions& options,
-               const SurfaceSurfaceExtremum& e, const OnMaterial& on) {
+               const SurfaceSurfaceExtremum& e, const SurfacePairEval& at, const OnMaterial& on) {
   if (on.on_edge) {
     return (e.status == ExtremalStatus::kConverged || e.status == ExtremalStatus::kAtBoundary) &&
            on.status == ExtremalStatus::kConverged && on.beta < options.activation &&
            on.beta > -options.max_penetration;
   }
   return (e.status == ExtremalStatus::kConverged || HeldOnMaterialBorder(wa, wb, e, on) ||
-          (options.accept_continuum && e.status == ExtremalStatus::kSingular)) &&
+          internal::LineContinuum(options, e, at)) &&
          e.beta < options.activation && e.beta > -options.max_penetration && e.alignment < 0.0;
 }
 
@@ -317,7 +317,7 @@ void RefineCluster(GlobalContactStage::Impl& m, const GlobalOptions& options, in
                    : e.status == ExtremalStatus::kConverged && e.kind == ExtremumKind::kMinimum) {
       *nearest = std::min(*nearest, on.on_edge ? on.beta : e.beta);
     }
-    ok = IsContact(wa, wb, options, e, on);
+    ok = IsContact(wa, wb, options, e, at, on);
     // The cluster's own minimum, apart by more than the activation distance where the offsets
     // met (its points within ρ of there): no contact here, and the other seeds would only find
     // it again. (The retries are for seeds that reach another region's pair, such as a deep
@@ -364,7 +364,7 @@ void GlobalContactStage::FindContacts(int a, int b, size_t first, size_t last,
   internal::ReviveNearMisses(m, a, b, pa, pb);
   for (const internal::Revived& r : m.revived) {
     const OnMaterial on{false, r.e.u, r.e.beta, r.e.p_f, r.e.p_g, r.e.status};
-    const bool contact = IsContact(wa, wb, options_, r.e, on);
+    const bool contact = IsContact(wa, wb, options_, r.e, r.at, on);
     if (!contact && !IsNearMiss(m, options_, a, b, r.e)) continue;
     const Eigen::Vector3d x = 0.5 * (r.e.p_f + r.e.p_g);
     const bool tracked_here = std::any_of(

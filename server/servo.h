@@ -149,6 +149,7 @@ class ServoLoop {
   contact::GlobalOptions GlobalStageOptions() const {
     contact::GlobalOptions o = scene_->global;
     o.accept_continuum = options_.line_contacts;
+    o.continuum_ratio = options_.line.enter;
     o.face_pairs = options_.face_contacts;
     return o;
   }

@@ -24,6 +24,8 @@ namespace tangent::server {
 struct HandDrive {
   double worst_violation = 0.0, max_force = 0.0, max_force_step = 0.0;
   int ticks = 0, events = 0;
+  /// Tracker steps that lost their contact (TickResult::lost: each re-solved in full).
+  int64_t lost = 0;
   double max_force_step_at = 0.0;  ///< the path's time (s) of the largest step
   bool all_finite = true;
   long allocations = 0;
@@ -65,6 +67,7 @@ inline HandDrive DriveAlongPath(const Scene& scene, const std::string& csv, int 
       now += 250'000;
       ++run.ticks;
       run.worst_violation = std::max(run.worst_violation, r.violation);
+      run.lost += r.lost;
       if (r.answered) {
         const Eigen::Vector3d F(r.wrench.force[0], r.wrench.force[1], r.wrench.force[2]);
         run.all_finite = run.all_finite && F.allFinite();

@@ -26,6 +26,7 @@ struct PegRun {
   double worst_violation = 0.0, max_force = 0.0, max_force_step = 0.0;
   int ticks = 0, edge_ticks = 0, wall_ticks = 0, crown_on_wall_ticks = 0, floor_ticks = 0;
   int events = 0;
+  int64_t lost = 0;  ///< tracker steps that lost their contact (HandDrive::lost)
   int contacts_in_hole = 0;      // plate-top contacts off the material and not on the rim
   double worst_rim_error = 0.0;  // an edge contact's point from the rim circle
   double deepest = 0.0;          // lowest sphere-centre height, m
@@ -107,6 +108,7 @@ PegRun RunPegInHole(const Scene& scene, const PegScene& names) {
   run.max_force_step = drive.max_force_step;
   run.ticks = drive.ticks;
   run.events = drive.events;
+  run.lost = drive.lost;
   run.allocations = drive.allocations;
   run.tick_seconds = drive.tick_seconds;
   run.pass_seconds = drive.pass_seconds;
@@ -127,13 +129,13 @@ TEST_P(PegInHoleTest, ThePegMeetsTheRimAsAnEdgeDropsInAndSlidesOnTheWall) {
       "ticks with a rim (edge) contact %d, on the wall %d (its crown %d), on the floor %d, events "
       "%d, contacts "
       "in the hole %d, worst rim error %.1e m, deepest centre %.2f mm, worst radial excess below "
-      "the plate %.1e m, end height %.2f mm, allocations %ld; servo %.1f us per tick, global "
-      "%.2f ms per pass\n",
+      "the plate %.1e m, end height %.2f mm, allocations %ld, contacts lost %lld; servo %.1f us "
+      "per tick, global %.2f ms per pass\n",
       GetParam().poles_on_axis ? "peg_in_hole.json, poles on the axis" : GetParam().file, run.ticks,
       run.worst_violation, run.max_force, run.max_force_step, run.edge_ticks, run.wall_ticks,
       run.crown_on_wall_ticks, run.floor_ticks, run.events, run.contacts_in_hole,
       run.worst_rim_error, run.deepest / mm, run.worst_outside, run.end_height / mm,
-      run.allocations, 1e6 * run.tick_seconds / run.ticks,
+      run.allocations, static_cast<long long>(run.lost), 1e6 * run.tick_seconds / run.ticks,
       1e3 * run.pass_seconds / (run.ticks / 16));
   EXPECT_EQ(run.contacts_in_hole, 0);
   EXPECT_LE(run.worst_rim_error, 1e-9);
