@@ -26,7 +26,7 @@ struct PegRun {
   double worst_violation = 0.0, max_force = 0.0, max_force_step = 0.0;
   int ticks = 0, edge_ticks = 0, wall_ticks = 0, crown_on_wall_ticks = 0, floor_ticks = 0;
   int events = 0;
-  int64_t lost = 0;  ///< tracker steps that lost their contact (HandDrive::lost)
+  int64_t lost = 0;              ///< tracker steps that lost their contact (HandDrive::lost)
   int contacts_in_hole = 0;      // plate-top contacts off the material and not on the rim
   double worst_rim_error = 0.0;  // an edge contact's point from the rim circle
   double deepest = 0.0;          // lowest sphere-centre height, m
