@@ -331,6 +331,13 @@ void Solver::AugmentedGradient() {
   ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, jstep_i_, 1.0, &g_);
 }
 
+void Solver::AddRowsGaussNewton() {
+  gn_e_.setConstant(mu_);
+  ev_.AddGaussNewton(ProblemEvaluator::kEquality, gn_e_, &H_);
+  for (int i = 0; i < ev_.c_i().size(); ++i) gn_i_[i] = active_[i] ? mu_ : 0.0;
+  ev_.AddGaussNewton(ProblemEvaluator::kInequality, gn_i_, &H_);
+}
+
 double Solver::NewtonMatrix() {
   // H = w_la M + Σ w J_oᵀJ_o + μ J_EᵀJ_E + μ J_AᵀJ_A (A: the active inequality rows), plus the
   // Lagrangian's curvature: objectives weighted by w r, equalities by −λ_E, active inequalities by
@@ -344,10 +351,7 @@ double Solver::NewtonMatrix() {
   if (B_.size()) H_.AddDense(B_);  // design mode: the design objectives' curvature model
   // The objective's share of the matrix sets the damping's scale (1e-300: an empty objective).
   const double objective_scale = H_.MaxAbsDiagonal() + 1e-300;
-  gn_e_.setConstant(mu_);
-  ev_.AddGaussNewton(ProblemEvaluator::kEquality, gn_e_, &H_);
-  for (int i = 0; i < ev_.c_i().size(); ++i) gn_i_[i] = active_[i] ? mu_ : 0.0;
-  ev_.AddGaussNewton(ProblemEvaluator::kInequality, gn_i_, &H_);
+  AddRowsGaussNewton();
   for (const Problem::Entry& o : problem_.objectives()) {
     weights_.segment(o.row, o.term->dim()) = o.weight * ev_.r_o().segment(o.row, o.term->dim());
   }
@@ -603,6 +607,7 @@ void Solver::RestoreFeasibility(Eigen::VectorXd* q, SolveStats* st) {
     active_[i] = c < 0.0 || lambda_i_[i] - mu_ * c > 0.0;
   }
   ev_.AnchorStates(0);
+  bool away = false;  // ev_ at a trial not kept
   for (int pass = 0; pass < 2 && st->max_violation > options_.constraint_tolerance; ++pass) {
     H_.SetZero();
     for (size_t b = 0; b < M_.size(); ++b) {
@@ -611,13 +616,7 @@ void Solver::RestoreFeasibility(Eigen::VectorXd* q, SolveStats* st) {
     // (The metric is singular along each quaternion's own direction: damped as a Newton step
     // is, relative to its scale, more until the matrix factors.)
     const double scale = H_.MaxAbsDiagonal() + 1e-300;
-    gn_e_.setConstant(mu_);
-    ev_.AddGaussNewton(ProblemEvaluator::kEquality, gn_e_, &H_);
-    for (int i = 0; i < ev_.c_i().size(); ++i) {
-      gn_i_[i] = active_[i] ? mu_ : 0.0;
-      jstep_i_[i] = active_[i] ? ev_.c_i()[i] : 0.0;
-    }
-    ev_.AddGaussNewton(ProblemEvaluator::kInequality, gn_i_, &H_);
+    AddRowsGaussNewton();
     ev_.FoldRotations(&H_);
     bool factored = false;
     for (double lm = std::max(options_.damping, 1e-12) * scale, added = 0.0;
@@ -629,6 +628,7 @@ void Solver::RestoreFeasibility(Eigen::VectorXd* q, SolveStats* st) {
     if (!factored) break;
     g_.setZero();
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kEquality, ev_.c_e(), mu_, &g_);
+    for (int i = 0; i < ev_.c_i().size(); ++i) jstep_i_[i] = active_[i] ? ev_.c_i()[i] : 0.0;
     ev_.AddJacobianTransposeTimes(ProblemEvaluator::kInequality, jstep_i_, mu_, &g_);
     SolveStep();
     // (No farther than the clearance guard allows: a correction of nanometres.)
@@ -639,15 +639,20 @@ void Solver::RestoreFeasibility(Eigen::VectorXd* q, SolveStats* st) {
     Normalize(&q_try_);
     ev_.Evaluate(q_try_);
     const double violation = Violation();
-    if (!(violation < st->max_violation) || !Returnable(q_try_)) break;
+    if (!(violation < st->max_violation) || !Returnable(q_try_)) {
+      away = true;
+      break;
+    }
     *q = q_try_;
     st->max_violation = violation;
     ++st->corrections;
     ev_.AnchorStates(0);
   }
   // Everything at *q (its contacts as they were there).
-  ev_.RewindStates(0);
-  ev_.Evaluate(*q);
+  if (away) {
+    ev_.RewindStates(0);
+    ev_.Evaluate(*q);
+  }
   ev_.ObjectiveGradient(*q, q_prev_, M_, &grad_e_);
   KktResidual(&kkt_);
   st->kkt_residual = MaxAbs(kkt_);

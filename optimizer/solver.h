@@ -216,6 +216,8 @@ class Solver {
   SolveStats InvalidInput(Eigen::VectorXd* q, SolveStats st);
   /// Builds H_; returns the scale of its objective part (for the damping).
   double NewtonMatrix();
+  /// H_ += μ J_EᵀJ_E + μ J_AᵀJ_A (A: the active inequality rows, active_).
+  void AddRowsGaussNewton();
   double Violation() const;
   double Complementarity() const;
   void Normalize(Eigen::VectorXd* q) const;
